@@ -1,0 +1,5 @@
+import sys
+
+from doctrpp.cli import main
+
+sys.exit(main())

@@ -1,0 +1,152 @@
+"""ONNX export: legacy TorchScript exporter at opset 17, simplified, metadata inside."""
+
+from __future__ import annotations
+
+import io
+import os
+import tempfile
+import time
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from doctrpp import contract
+
+from .metadata import model_metadata
+from .model import DocTrPP, ExportWrapper
+
+OPSET = 17
+
+
+@dataclass(frozen=True)
+class ExportResult:
+    path: Path
+    seconds: float
+    size_bytes: int
+    node_count: int
+
+
+def _trace_to_onnx(model: DocTrPP) -> bytes:
+    wrapper = ExportWrapper(model).eval()
+    dummy = torch.rand(1, 3, contract.INPUT_SIZE, contract.INPUT_SIZE)
+    buffer = io.BytesIO()
+    with torch.no_grad(), warnings.catch_warnings():
+        # Instance norm without running stats is exactly what we want; silence the notice.
+        warnings.filterwarnings("ignore", message=".*instance_norm.*")
+        warnings.filterwarnings("ignore", category=torch.jit.TracerWarning)
+        warnings.filterwarnings("ignore", category=DeprecationWarning)  # legacy exporter, chosen
+        torch.onnx.export(
+            wrapper,
+            (dummy,),
+            buffer,
+            input_names=[contract.INPUT_NAME],
+            output_names=[contract.OUTPUT_NAME],
+            opset_version=OPSET,
+            dynamo=False,  # the dynamo exporter moves to opset 18 and writes a side file
+            do_constant_folding=True,
+        )
+    return buffer.getvalue()
+
+
+def _simplify(onnx_model):
+    import onnxslim
+
+    return onnxslim.slim(onnx_model)
+
+
+def deduplicate_initializers(onnx_model) -> int:
+    """Merge initializers with identical dtype, shape and bytes; returns how many went.
+
+    The tracer inlines a buffer once per use (each positional encoding ~9 times), which
+    would add ~15 MB of copies to the file.
+    """
+    from onnx import numpy_helper
+
+    canonical: dict[tuple, str] = {}
+    renamed: dict[str, str] = {}
+    kept = []
+    for init in onnx_model.graph.initializer:
+        array = numpy_helper.to_array(init)
+        key = (array.dtype.str, array.shape, array.tobytes())
+        if key in canonical:
+            renamed[init.name] = canonical[key]
+        else:
+            canonical[key] = init.name
+            kept.append(init)
+    if renamed:
+        del onnx_model.graph.initializer[:]
+        onnx_model.graph.initializer.extend(kept)
+        for node in onnx_model.graph.node:
+            for i, name in enumerate(node.input):
+                if name in renamed:
+                    node.input[i] = renamed[name]
+    return len(renamed)
+
+
+def write_atomically(data: bytes, path: Path) -> None:
+    """Write next to the target and rename, so a crash never leaves half a file."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def export_onnx(
+    model: DocTrPP,
+    out_path: str | Path,
+    *,
+    checkpoint_sha256: str = "",
+    checkpoint_note: str = "",
+    simplify: bool = True,
+) -> ExportResult:
+    """Export `model` (eval mode, fp32) to `out_path`; returns timing, size and node count."""
+    import onnx
+
+    start = time.perf_counter()
+    onnx_model = onnx.load_from_string(_trace_to_onnx(model.eval()))
+    if simplify:
+        onnx_model = _simplify(onnx_model)
+    deduplicate_initializers(onnx_model)
+    meta = model_metadata(model.config, checkpoint_sha256, checkpoint_note, precision="fp32")
+    del onnx_model.metadata_props[:]
+    for key, value in meta.items():
+        onnx_model.metadata_props.add(key=key, value=value)
+    onnx.checker.check_model(onnx_model)
+    data = onnx_model.SerializeToString()
+    out_path = Path(out_path)
+    write_atomically(data, out_path)
+    return ExportResult(
+        path=out_path,
+        seconds=time.perf_counter() - start,
+        size_bytes=len(data),
+        node_count=len(onnx_model.graph.node),
+    )
+
+
+def onnx_parity_px(
+    model: DocTrPP, onnx_path: str | Path, images: np.ndarray, threads: int = 2
+) -> float:
+    """Largest |ONNX - PyTorch| over `images` (N, 3, 288, 288), in pixels of the 288 grid."""
+    import onnxruntime as ort
+
+    options = ort.SessionOptions()
+    options.intra_op_num_threads = threads
+    session = ort.InferenceSession(str(onnx_path), options, providers=["CPUExecutionProvider"])
+    wrapper = ExportWrapper(model.eval())
+    worst = 0.0
+    for image in images:
+        batch = image[None].astype(np.float32)
+        onnx_out = session.run(None, {contract.INPUT_NAME: batch})[0]
+        with torch.no_grad():
+            torch_out = wrapper(torch.from_numpy(batch)).numpy()
+        diff_px = contract.normalised_to_pixels(onnx_out) - contract.normalised_to_pixels(torch_out)
+        worst = max(worst, float(np.abs(diff_px).max()))
+    return worst

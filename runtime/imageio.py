@@ -1,0 +1,67 @@
+"""Reading and writing photos: EXIF orientation, 8/16-bit, gray/colour, atomic writes."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+IMAGE_SUFFIXES = frozenset(
+    {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp", ".jp2", ".pgm", ".ppm", ".pbm"}
+)
+
+
+class ImageError(ValueError):
+    """An input image that cannot be used; the message is one line naming the file."""
+
+
+def read_image(path: str | Path) -> np.ndarray:
+    """Read a photo as OpenCV does (BGR or gray), honouring EXIF orientation.
+
+    8- and 16-bit depths are kept; an alpha channel is dropped (OpenCV applies EXIF
+    orientation only when it decodes without alpha).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ImageError(f"{path}: no such file")
+    if path.stat().st_size == 0:
+        raise ImageError(f"{path}: file is empty")
+    # np.fromfile + imdecode copes with non-ASCII paths, unlike cv2.imread on some systems.
+    data = np.fromfile(str(path), dtype=np.uint8)
+    image = cv2.imdecode(data, cv2.IMREAD_ANYDEPTH | cv2.IMREAD_ANYCOLOR)
+    if image is None or image.size == 0:
+        raise ImageError(f"{path}: not a readable image")
+    return image
+
+
+def write_image(path: str | Path, image: np.ndarray) -> None:
+    """Encode by the path's suffix and write atomically (temp file + rename)."""
+    path = Path(path)
+    ok, encoded = cv2.imencode(path.suffix or ".png", image)
+    if not ok:
+        raise ImageError(f"{path}: cannot encode an image with this suffix")
+    write_bytes_atomically(path, encoded.tobytes())
+
+
+def write_bytes_atomically(path: str | Path, data: bytes) -> None:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def save_npy_atomically(path: str | Path, array: np.ndarray) -> None:
+    import io
+
+    buffer = io.BytesIO()
+    np.save(buffer, array)
+    write_bytes_atomically(path, buffer.getvalue())

@@ -1,0 +1,73 @@
+"""`Rectifier`: photo in, rectified photo out, with per-stage timings."""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from doctrpp import contract
+
+from .backends import ModelError, open_backend
+from .processing import model_input, photo_map, remap
+
+
+@dataclass
+class RectificationResult:
+    rectified: np.ndarray  # same size, channels and dtype as the input
+    backward_map: np.ndarray  # (S, S, 2) normalised, x then y
+    timings: dict[str, float] = field(default_factory=dict)  # seconds per stage
+
+    def photo_map(self) -> np.ndarray:
+        """The full-resolution map in photo pixels (H, W, 2), as used for the remap."""
+        height, width = self.rectified.shape[:2]
+        return photo_map(self.backward_map, height, width)
+
+
+class Rectifier:
+    """Runs a DocTr++ model file (.onnx) on photos given as OpenCV arrays (BGR or gray)."""
+
+    def __init__(self, model_path: str | Path, threads: int | None = None) -> None:
+        self.model_path = Path(model_path)
+        self.backend = open_backend(self.model_path, threads)
+        self.metadata = self.backend.metadata
+        self.input_size = self._input_size()
+        self.config = json.loads(self.metadata.get(contract.META_CONFIG, "{}") or "{}")
+
+    def _input_size(self) -> int:
+        size = self.metadata.get(contract.META_INPUT_SIZE)
+        if size is None:  # a file exported elsewhere: fall back to its static input shape
+            shape = self.backend.input_shape
+            size = shape[-1] if isinstance(shape[-1], int) else contract.INPUT_SIZE
+        color = self.metadata.get(contract.META_COLOR_ORDER, "RGB")
+        layout = self.metadata.get(contract.META_INPUT_LAYOUT, "NCHW")
+        if color != "RGB" or layout != "NCHW":
+            raise ModelError(f"{self.model_path}: unsupported input {layout}/{color}")
+        return int(size)
+
+    def predict_map(self, image: np.ndarray) -> np.ndarray:
+        """The normalised backward map on the model grid, (S, S, 2), x then y."""
+        return self.backend.run(model_input(image, self.input_size))[0].transpose(1, 2, 0)
+
+    def run(self, image: np.ndarray) -> RectificationResult:
+        timings: dict[str, float] = {}
+        start = time.perf_counter()
+        batch = model_input(image, self.input_size)
+        timings["preprocess"] = time.perf_counter() - start
+
+        start = time.perf_counter()
+        backward_map = self.backend.run(batch)[0].transpose(1, 2, 0)
+        timings["inference"] = time.perf_counter() - start
+
+        start = time.perf_counter()
+        pixel_map = photo_map(backward_map, image.shape[0], image.shape[1])
+        rectified = remap(image, pixel_map)
+        timings["postprocess"] = time.perf_counter() - start
+        return RectificationResult(rectified, np.ascontiguousarray(backward_map), timings)
+
+    def rectify(self, image: np.ndarray) -> np.ndarray:
+        """The rectified photo, same size, channels and dtype as `image`."""
+        return self.run(image).rectified

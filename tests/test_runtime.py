@@ -1,0 +1,152 @@
+"""The lean runtime: reference post-processing, input kinds, errors, no torch."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import cv2
+import numpy as np
+import pytest
+import torch
+import torch.nn.functional as F
+
+from doctrpp.runtime import ImageError, ModelError, Rectifier, read_image
+from doctrpp.runtime.processing import model_input, photo_map, remap
+
+
+def reference_rectify(photo_bgr: np.ndarray, backward_map: np.ndarray) -> np.ndarray:
+    """The authors' inference script: resize + box blur the map, grid_sample, truncate."""
+    h, w = photo_bgr.shape[:2]
+    bx = cv2.blur(cv2.resize(backward_map[:, :, 0], (w, h)), (3, 3))
+    by = cv2.blur(cv2.resize(backward_map[:, :, 1], (w, h)), (3, 3))
+    grid = torch.from_numpy(np.stack([bx, by], axis=2)).unsqueeze(0)
+    photo = torch.from_numpy(photo_bgr[:, :, ::-1] / 255.0).permute(2, 0, 1)[None].float()
+    out = F.grid_sample(photo, grid, align_corners=True)
+    return (out[0] * 255).permute(1, 2, 0).numpy()[:, :, ::-1].astype(np.uint8)
+
+
+def smooth_map(size: int = 288, seed: int = 0) -> np.ndarray:
+    """A plausible normalised backward map: identity plus a smooth warp, partly outside."""
+    rng = np.random.default_rng(seed)
+    g = np.linspace(-1, 1, size, dtype=np.float32)
+    x, y = np.meshgrid(g, g)
+    bx = 1.05 * x + 0.08 * np.sin(3 * y + rng.random()) + 0.02
+    by = 1.03 * y + 0.06 * np.cos(2 * x + rng.random())
+    return np.stack([bx, by], axis=2).astype(np.float32)
+
+
+def test_postprocess_equals_reference_grid_sample(document_photo, report_difference):
+    backward_map = smooth_map()
+    ours = remap(document_photo, photo_map(backward_map, *document_photo.shape[:2]))
+    reference = reference_rectify(document_photo, backward_map)
+    worst = int(np.abs(ours.astype(int) - reference.astype(int)).max())
+    report_difference("runtime remap vs reference grid_sample", worst, 1, unit="grey levels")
+    assert worst <= 1
+
+
+def test_model_input_matches_reference_preprocessing(document_photo):
+    reference = cv2.resize(document_photo[:, :, ::-1] / 255.0, (288, 288)).transpose(2, 0, 1)
+    ours = model_input(document_photo, 288)[0]
+    assert ours.dtype == np.float32
+    assert np.abs(ours - reference).max() < 1e-6
+
+
+def test_rectifier_on_tiny_model(tiny_onnx, tiny_model, document_photo):
+    rectifier = Rectifier(tiny_onnx, threads=1)
+    backward_map = rectifier.predict_map(document_photo)
+    assert backward_map.shape == (288, 288, 2)
+    with torch.no_grad():
+        expected = tiny_model(torch.from_numpy(model_input(document_photo, 288))).numpy()[0]
+    expected = ((2 * (expected / 286.8) - 1) * 0.99).transpose(1, 2, 0)
+    assert np.abs(backward_map - expected).max() < 1e-5
+    result = rectifier.run(document_photo)
+    assert result.rectified.shape == document_photo.shape
+    assert result.rectified.dtype == np.uint8
+    assert set(result.timings) == {"preprocess", "inference", "postprocess"}
+    assert result.photo_map().shape == (300, 240, 2)
+
+
+@pytest.mark.parametrize(
+    "convert",
+    [
+        lambda im: cv2.cvtColor(im, cv2.COLOR_BGR2GRAY),
+        lambda im: cv2.cvtColor(im, cv2.COLOR_BGR2BGRA),
+        lambda im: im.astype(np.uint16) * 257,
+        lambda im: im.astype(np.float32) / 255.0,
+    ],
+    ids=["gray", "bgra", "uint16", "float"],
+)
+def test_input_kinds_keep_size_channels_and_depth(tiny_onnx, document_photo, convert):
+    image = convert(document_photo)
+    rectifier = Rectifier(tiny_onnx)
+    out = rectifier.rectify(image)
+    assert out.shape == image.shape and out.dtype == image.dtype
+    # All kinds feed the same model input as the 8-bit BGR photo.
+    base = model_input(document_photo, 288)
+    if image.ndim == 3:
+        assert np.abs(model_input(image, 288) - base).max() < 1e-5
+
+
+def test_bad_arrays_rejected(tiny_onnx):
+    rectifier = Rectifier(tiny_onnx)
+    with pytest.raises(ValueError, match="dtype"):
+        rectifier.rectify(np.zeros((10, 10, 3), np.int32))
+    with pytest.raises(ValueError, match="shape"):
+        rectifier.rectify(np.zeros((10, 10, 2), np.uint8))
+
+
+def test_exif_orientation_honoured(tmp_path):
+    from PIL import Image
+
+    pixels = np.zeros((40, 80, 3), np.uint8)
+    pixels[:, :20] = 255
+    image = Image.fromarray(pixels)
+    exif = image.getexif()
+    exif[0x0112] = 6  # rotate 90 degrees clockwise to display
+    path = tmp_path / "rotated.jpg"
+    image.save(path, exif=exif)
+    loaded = read_image(path)
+    assert loaded.shape[:2] == (80, 40)
+    assert loaded[:20].mean() > 200 and loaded[-20:].mean() < 50  # white band now on top
+
+
+def test_unreadable_files(tmp_path):
+    (tmp_path / "empty.png").write_bytes(b"")
+    (tmp_path / "text.jpg").write_text("hello")
+    for name, message in [
+        ("empty.png", "empty"),
+        ("text.jpg", "not a readable image"),
+        ("absent.png", "no such file"),
+    ]:
+        with pytest.raises(ImageError, match=message) as info:
+            read_image(tmp_path / name)
+        assert "\n" not in str(info.value)
+
+
+def test_bad_model_files(tmp_path):
+    junk = tmp_path / "junk.onnx"
+    junk.write_bytes(b"junk")
+    with pytest.raises(ModelError, match="cannot load ONNX model"):
+        Rectifier(junk)
+    with pytest.raises(ModelError, match="unknown model format"):
+        Rectifier(_touch(tmp_path / "m.pt"))
+    with pytest.raises(ModelError, match="not found"):
+        Rectifier(tmp_path / "absent.onnx")
+
+
+def _touch(path):
+    path.write_bytes(b"x")
+    return path
+
+
+def test_runtime_never_imports_torch(tiny_onnx):
+    code = (
+        "import sys, numpy as np\n"
+        "import doctrpp, doctrpp.runtime, doctrpp.cli\n"
+        f"r = doctrpp.runtime.Rectifier({str(tiny_onnx)!r})\n"
+        "r.rectify(np.zeros((50, 40, 3), np.uint8))\n"
+        "doctrpp.cli.build_parser()\n"
+        "assert 'torch' not in sys.modules, 'torch was imported'\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
