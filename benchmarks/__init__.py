@@ -1,0 +1,1 @@
+"""FPS and accuracy-drop benchmarks, and the paper's metrics (`doctrpp.benchmarks.metrics`)."""

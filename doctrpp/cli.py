@@ -12,6 +12,8 @@ from doctrpp.errors import CliError
 def build_parser() -> argparse.ArgumentParser:
     from doctrpp.export import cli as export_cli
     from doctrpp.runtime import cli as runtime_cli
+    from doctrpp.training import cli as training_cli
+    from doctrpp.udir import cli as udir_cli
 
     parser = argparse.ArgumentParser(
         prog="doctrpp",
@@ -21,6 +23,8 @@ def build_parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     export_cli.add_parser(commands)
     runtime_cli.add_parser(commands)
+    udir_cli.add_parser(commands)
+    training_cli.add_parser(commands)
     return parser
 
 

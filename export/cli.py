@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from doctrpp.errors import CliError
+from doctrpp.errors import CliError, require
 
 PARITY_TOLERANCE_PX = 1e-3
 
@@ -35,19 +35,8 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=run)
 
 
-def _require_torch() -> None:
-    try:
-        import onnx  # noqa: F401
-        import torch  # noqa: F401
-    except ImportError as exc:
-        raise CliError(
-            f"export needs the [export] extra ({exc.name} is missing): "
-            "pip install 'doctrpp-edge[export]'"
-        ) from None
-
-
 def run(args: argparse.Namespace) -> int:
-    _require_torch()
+    require("torch", "onnx", "onnxslim", extra="export")
     import numpy as np
     import torch
 

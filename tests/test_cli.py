@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -13,9 +14,14 @@ from doctrpp import __version__
 from doctrpp.cli import main
 
 
-def run_cli(*args: str) -> subprocess.CompletedProcess:
+def run_cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
+    # Run outside the source tree, so the installed package is what gets imported.
     return subprocess.run(
-        [sys.executable, "-m", "doctrpp", *args], capture_output=True, text=True, timeout=300
+        [sys.executable, "-m", "doctrpp", *args],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=cwd or Path(__file__).resolve().parents[2],
     )
 
 

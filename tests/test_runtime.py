@@ -149,4 +149,4 @@ def test_runtime_never_imports_torch(tiny_onnx):
         "doctrpp.cli.build_parser()\n"
         "assert 'torch' not in sys.modules, 'torch was imported'\n"
     )
-    subprocess.run([sys.executable, "-c", code], check=True)
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=tiny_onnx.parent)

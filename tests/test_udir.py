@@ -1,0 +1,165 @@
+"""The UDIR-style generator: exact ground truth, three kinds, determinism, CLI."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from doctrpp.cli import main
+from doctrpp.udir.sample import generate, kind_for_index, make_scene
+from doctrpp.udir.scene import KINDS
+
+SIZE = 288
+SEEDS = range(200, 209)  # three of each kind
+
+
+def _pixel_map(backward_map: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
+    px = ((backward_map[..., 0] + 1) / 2 * (size - 1)).astype(np.float32)
+    py = ((backward_map[..., 1] + 1) / 2 * (size - 1)).astype(np.float32)
+    return px, py
+
+
+def _inside(px: np.ndarray, py: np.ndarray, size: int, border: int = 0) -> np.ndarray:
+    lo, hi = border, size - 1 - border
+    return (px >= lo) & (px <= hi) & (py >= lo) & (py <= hi)
+
+
+def smooth_page(height: int, width: int, seed: int) -> np.ndarray:
+    """Low-frequency colours: resampling the page costs nothing, only geometry can differ."""
+    field = np.random.default_rng(seed).integers(0, 256, (5, 5, 3)).astype(np.float32)
+    return (
+        cv2.resize(field, (width, height), interpolation=cv2.INTER_CUBIC)
+        .clip(0, 255)
+        .astype(np.uint8)
+    )
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_gt_map_inverts_the_render_geometry(seed, report_difference):
+    """Sampling the crop's page coordinates with the GT map gives the target's coordinates."""
+    scene = make_scene(seed, kind_for_index(seed))
+    u, v = scene.crop_uv(SIZE, SIZE)
+    px, py = _pixel_map(scene.backward_map(SIZE), SIZE)
+    inside = _inside(px, py, SIZE)
+    u0, v0, u1, v1 = scene.uv_box
+    target_u, target_v = np.meshgrid(np.linspace(u0, u1, SIZE), np.linspace(v0, v1, SIZE))
+    got_u = cv2.remap(u, px, py, cv2.INTER_LINEAR)
+    got_v = cv2.remap(v, px, py, cv2.INTER_LINEAR)
+    error = np.hypot(
+        (got_u - target_u) * (SIZE - 1) / (u1 - u0), (got_v - target_v) * (SIZE - 1) / (v1 - v0)
+    )[inside]
+    report_difference(f"seed {seed} {scene.kind}: geometric self-consistency", error.max(), 0.1)
+    assert error.max() < 0.1
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_remapped_crop_reproduces_flat_target(seed, report_difference):
+    """Crop remapped by its GT map = flat target wherever the map points inside the crop."""
+    scene = make_scene(seed, kind_for_index(seed))
+    scene = dataclasses.replace(scene, page=smooth_page(*scene.page.shape[:2], seed))
+    crop = scene.render(SIZE, SIZE, photometric=False)
+    px, py = _pixel_map(scene.backward_map(SIZE), SIZE)
+    rectified = cv2.remap(crop, px, py, cv2.INTER_LINEAR)
+    # Leave out a 2-pixel band at the crop's and the page's edges (edge anti-aliasing).
+    keep = cv2.erode(_inside(px, py, SIZE, border=1).astype(np.uint8), np.ones((5, 5))) > 0
+    keep[:2], keep[-2:], keep[:, :2], keep[:, -2:] = False, False, False, False
+    difference = np.abs(rectified.astype(int) - scene.flat_target(SIZE).astype(int))[keep]
+    report_difference(
+        f"seed {seed} {scene.kind}: photometric self-consistency (mean)",
+        difference.mean(),
+        1.0,
+        unit="grey levels",
+    )
+    assert keep.mean() > 0.3
+    assert difference.mean() < 1.0
+    assert np.percentile(difference, 99.9) <= 6
+
+
+def test_three_kinds_in_equal_thirds():
+    assert [kind_for_index(i) for i in range(6)] == [*KINDS, *KINDS]
+    assert kind_for_index(4, "none") == "none"
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_kinds_show_what_they_say(kind):
+    """complete: whole page inside; none: no background; partial: both."""
+    for seed in range(3):
+        scene = make_scene(seed, kind)
+        u, v = scene.crop_uv(65, 65)
+        on_page = (u >= 0) & (u <= 1) & (v >= 0) & (v <= 1)
+        px, py = _pixel_map(scene.backward_map(65), 65)
+        if kind == "complete":
+            assert _inside(px, py, 65).all() and not on_page.all()
+            assert scene.uv_box == (0.0, 0.0, 1.0, 1.0)
+        elif kind == "none":
+            assert on_page.all()
+        else:
+            assert 0.2 < on_page.mean() < 0.95
+
+
+def test_same_seed_same_sample():
+    a, b = generate(5, "partial"), generate(5, "partial")
+    assert np.array_equal(a.image, b.image)
+    assert np.array_equal(a.flat, b.flat)
+    assert np.array_equal(a.backward_map, b.backward_map)
+    assert a.params == b.params
+    c = generate(6, "partial")
+    assert not np.array_equal(a.image, c.image)
+
+
+def test_full_resolution_and_continuity():
+    scene = make_scene(11, "partial")
+    small, large = scene.backward_map(288), scene.backward_map(1152)
+    assert large.shape == (1152, 1152, 2) and np.isfinite(large).all()
+    # The same continuous function at two resolutions.
+    assert np.abs(cv2.resize(large, (288, 288), interpolation=cv2.INTER_AREA) - small).max() < 5e-3
+    steps = np.abs(np.diff(small, axis=0)).max(), np.abs(np.diff(small, axis=1)).max()
+    assert max(steps) < 0.1  # no jumps: < ~14 px per pixel step
+    image = scene.render(720, 540)
+    assert image.shape == (720, 540, 3) and image.dtype == np.uint8
+
+
+def test_crops_cli_writes_samples(tmp_path):
+    out = tmp_path / "crops"
+    assert main(["crops", "--out", str(out), "--n", "4", "--seed", "3", "--workers", "1"]) == 0
+    names = sorted(p.name for p in out.iterdir())
+    assert "00000.png" in names and "00003_map.npy" in names and "00002_flat.png" in names
+    record = json.loads((out / "00001.json").read_text())
+    assert record["kind"] == "partial" and record["seed"] == 4
+    backward_map = np.load(out / "00000_map.npy")
+    assert backward_map.shape == (288, 288, 2) and backward_map.dtype == np.float32
+    assert np.array_equal(backward_map, generate(3, "complete").backward_map)
+    sheet = tmp_path / "sheet.png"
+    assert main(["sheet", str(out), "-o", str(sheet)]) == 0
+    assert cv2.imread(str(sheet)).shape == (2 * 288, 3 * 3 * 288, 3)
+
+
+def test_crops_from_photos(tmp_path, document_photo):
+    photos = tmp_path / "photos"
+    photos.mkdir()
+    cv2.imwrite(str(photos / "p.jpg"), document_photo)
+    out = tmp_path / "calib"
+    assert (
+        main(
+            ["crops", "--out", str(out), "--n", "6", "--from-photos", str(photos), "--workers", "1"]
+        )
+        == 0
+    )
+    kinds = [json.loads((out / f"{i:05d}.json").read_text())["kind"] for i in range(6)]
+    assert kinds == [*KINDS, *KINDS]
+    assert not list(out.glob("*_map.npy"))
+
+
+def test_crops_cli_errors(tmp_path, capsys):
+    assert main(["crops", "--out", str(tmp_path), "--n", "0"]) == 2
+    assert (
+        main(
+            ["crops", "--out", str(tmp_path), "--n", "2", "--from-photos", str(tmp_path / "absent")]
+        )
+        == 2
+    )
+    assert "no such folder" in capsys.readouterr().err

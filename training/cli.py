@@ -1,0 +1,82 @@
+"""`doctrpp train`: train DocTr++ weights on generated UDIR-style crops."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from doctrpp.errors import CliError, require
+
+
+def add_parser(commands: argparse._SubParsersAction) -> None:
+    p = commands.add_parser(
+        "train",
+        help="train weights on generated crops (CPU or GPUs; torchrun for several)",
+        description="Train the DocTr++ network with the paper's recipe (L1 on the backward map, "
+        "AdamW, OneCycle max lr 1e-4 with 10%% warm-up, HSV jitter) on UDIR-style crops "
+        "generated on the fly. Checkpoints RUN_DIR/last.pth and best.pth; logs log.csv and "
+        "validation.jsonl. Several GPUs/nodes: torchrun --nproc_per_node N -m doctrpp train ...",
+    )
+    p.add_argument("--out", type=Path, required=True, help="run folder (created)")
+    p.add_argument("--config", default="reference", help="model config preset (default reference)")
+    p.add_argument("--steps", type=int, default=100_000, help="length of the lr schedule")
+    p.add_argument("--stop-at", type=int, help="stop after this step (schedule keeps --steps)")
+    p.add_argument("--batch", type=int, default=12, help="batch per process (default 12)")
+    p.add_argument("--lr", type=float, default=1e-4, help="OneCycle max learning rate")
+    p.add_argument(
+        "--resume", type=Path, help="checkpoint to continue from (e.g. RUN_DIR/last.pth)"
+    )
+    p.add_argument("--data", type=Path, help="train on a folder from `doctrpp crops` instead")
+    p.add_argument("--workers", type=int, default=1, help="data generator processes")
+    p.add_argument("--threads", type=int, help="torch threads per process")
+    p.add_argument("--no-bf16", action="store_true", help="train in fp32 (no bf16 autocast)")
+    p.add_argument("--validate-every", type=int, default=200)
+    p.add_argument("--checkpoint-every", type=int, default=50)
+    p.add_argument("--validation-size", type=int, default=48, help="fixed validation crops")
+    p.add_argument("--max-minutes", type=float, help="stop cleanly after this long")
+    p.add_argument("--seed", type=int, default=0)
+    p.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    require("torch", extra="export")
+    from doctrpp.export.config import config_by_name
+
+    from .loop import TrainSettings, train
+
+    try:
+        config = config_by_name(args.config)
+    except ValueError as exc:
+        raise CliError(str(exc)) from None
+    if args.resume and not args.resume.is_file():
+        raise CliError(f"--resume {args.resume}: no such file")
+    if args.data and not args.data.is_dir():
+        raise CliError(f"--data {args.data}: no such folder")
+    if args.out.exists() and not args.out.is_dir():
+        raise CliError(f"--out {args.out} exists and is not a folder")
+    if not args.resume and (args.out / "last.pth").exists():
+        raise CliError(f"{args.out} already holds a run; pass --resume {args.out / 'last.pth'}")
+    settings = TrainSettings(
+        out=args.out,
+        config=config,
+        steps=args.steps,
+        batch=args.batch,
+        max_lr=args.lr,
+        bf16=not args.no_bf16,
+        workers=args.workers,
+        threads=args.threads,
+        validate_every=args.validate_every,
+        checkpoint_every=args.checkpoint_every,
+        validation_size=args.validation_size,
+        data_folder=args.data,
+        max_minutes=args.max_minutes,
+        stop_at=args.stop_at,
+        resume=args.resume,
+        seed=args.seed,
+    )
+    state = train(settings)
+    print(
+        f"stopped at step {state['step']} ({state['samples_seen']} samples, "
+        f"{state['cpu_seconds'] / 3600:.2f} CPU hours); checkpoint {args.out / 'last.pth'}"
+    )
+    return 0

@@ -1,0 +1,83 @@
+"""A fixed generated validation set, scored per crop kind."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from doctrpp import contract
+from doctrpp.benchmarks.metrics import map_drift, ms_ssim_masked
+from doctrpp.runtime.processing import photo_map, remap
+from doctrpp.udir.sample import generate, kind_for_index
+
+from .data import VALIDATION_SEED_OFFSET, to_tensors
+
+
+@dataclass
+class ValidationItem:
+    kind: str
+    image: np.ndarray  # BGR uint8 288x288
+    backward_map: np.ndarray  # (288, 288, 2) normalised
+
+
+def validation_set(count: int = 48) -> list[ValidationItem]:
+    items = []
+    for i in range(count):
+        sample = generate(VALIDATION_SEED_OFFSET + i, kind_for_index(i))
+        items.append(ValidationItem(sample.kind, sample.image, sample.backward_map))
+    return items
+
+
+def identity_map(size: int = contract.INPUT_SIZE) -> np.ndarray:
+    g = np.linspace(-1, 1, size, dtype=np.float32)
+    x, y = np.meshgrid(g, g)
+    return np.stack([x, y], -1)
+
+
+def _rectify(image: np.ndarray, backward_map: np.ndarray) -> np.ndarray:
+    return remap(image, photo_map(backward_map, *image.shape[:2]))
+
+
+def score_maps(items: list[ValidationItem], predicted: list[np.ndarray]) -> dict[str, float]:
+    """Mean map error (px of the 288 grid) and MS-SSIM-M per kind and overall."""
+    per_kind: dict[str, list[tuple[float, float]]] = {}
+    for item, bm in zip(items, predicted, strict=True):
+        error = map_drift(bm, item.backward_map).mean_px
+        quality = ms_ssim_masked(_rectify(item.image, bm), _rectify(item.image, item.backward_map))
+        per_kind.setdefault(item.kind, []).append((error, quality))
+    scores: dict[str, float] = {}
+    everything = [v for values in per_kind.values() for v in values]
+    for kind, values in [*per_kind.items(), ("all", everything)]:
+        scores[f"map_error_px/{kind}"] = float(np.mean([v[0] for v in values]))
+        scores[f"ms_ssim_m/{kind}"] = float(np.mean([v[1] for v in values]))
+    return scores
+
+
+@torch.no_grad()
+def predict_maps(
+    model: torch.nn.Module,
+    items: list[ValidationItem],
+    batch: int = 8,
+    autocast_dtype: torch.dtype | None = None,
+) -> list[np.ndarray]:
+    was_training = model.training
+    model.eval()
+    device = next(model.parameters()).device
+    maps: list[np.ndarray] = []
+    for start in range(0, len(items), batch):
+        chunk = items[start : start + batch]
+        images = torch.stack([to_tensors(it.image, it.backward_map)[0] for it in chunk])
+        with torch.autocast(
+            device.type, dtype=autocast_dtype or torch.bfloat16, enabled=autocast_dtype is not None
+        ):
+            pixels = model(images.to(device)).float().cpu().numpy()
+        maps.extend(contract.pixels_to_normalised(p).transpose(1, 2, 0) for p in pixels)
+    model.train(was_training)
+    return maps
+
+
+def identity_scores(items: list[ValidationItem]) -> dict[str, float]:
+    """The untouched input as a baseline: the identity backward map."""
+    return score_maps(items, [identity_map()] * len(items))

@@ -1,0 +1,39 @@
+"""Crops of the three kinds cut from a user's own photos (no ground truth), for calibration.
+
+Without a document mask the kinds are heuristics on a photo that shows one document
+roughly centred: 'complete' keeps the whole frame (a small random trim), 'partial' cuts
+a window off one side, 'none' takes a window from the middle of the frame.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .scene import KINDS
+
+
+def photo_crop_box(rng: np.random.Generator, height: int, width: int, kind: str):
+    """(x0, y0, x1, y1) in pixels for a crop of `kind` from a height x width photo."""
+    if kind not in KINDS:
+        raise ValueError(f"unknown crop kind {kind!r}")
+    if kind == "complete":
+        trim = rng.uniform(0, 0.04, 4)
+        return (
+            int(trim[0] * width),
+            int(trim[1] * height),
+            int(width * (1 - trim[2])),
+            int(height * (1 - trim[3])),
+        )
+    if kind == "none":
+        fw, fh = rng.uniform(0.3, 0.5, 2)
+        cx, cy = rng.uniform(0.4, 0.6, 2)
+    else:
+        fw, fh = rng.uniform(0.45, 0.8, 2)
+        side = rng.integers(0, 4)
+        cx, cy = [(fw / 2, 0.5), (1 - fw / 2, 0.5), (0.5, fh / 2), (0.5, 1 - fh / 2)][side]
+        cx, cy = cx + rng.uniform(-0.1, 0.1), cy + rng.uniform(-0.1, 0.1)
+    x0 = int(np.clip((cx - fw / 2) * width, 0, width - 2))
+    y0 = int(np.clip((cy - fh / 2) * height, 0, height - 2))
+    x1 = int(np.clip((cx + fw / 2) * width, x0 + 2, width))
+    y1 = int(np.clip((cy + fh / 2) * height, y0 + 2, height))
+    return x0, y0, x1, y1
