@@ -11,6 +11,7 @@ from doctrpp.errors import CliError
 
 def build_parser() -> argparse.ArgumentParser:
     from doctrpp.export import cli as export_cli
+    from doctrpp.quantize import cli as quantize_cli
     from doctrpp.runtime import cli as runtime_cli
     from doctrpp.training import cli as training_cli
     from doctrpp.udir import cli as udir_cli
@@ -22,6 +23,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"doctrpp-edge {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     export_cli.add_parser(commands)
+    quantize_cli.add_parser(commands)
     runtime_cli.add_parser(commands)
     udir_cli.add_parser(commands)
     training_cli.add_parser(commands)

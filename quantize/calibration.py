@@ -1,0 +1,53 @@
+"""Calibration inputs: UDIR-style generated crops (three kinds) or the user's own images."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+
+import numpy as np
+
+from doctrpp import contract
+from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
+from doctrpp.runtime.processing import model_input
+
+CALIBRATION_SEED_OFFSET = 2_000_000_000  # away from training and validation seeds
+
+
+def generated_inputs(
+    count: int, seed_offset: int = CALIBRATION_SEED_OFFSET
+) -> Iterator[np.ndarray]:
+    """Model inputs from `count` generated crops, equal thirds of the three kinds."""
+    from doctrpp.udir.sample import generate, kind_for_index
+
+    for i in range(count):
+        sample = generate(seed_offset + i, kind_for_index(i))
+        yield model_input(sample.image, contract.INPUT_SIZE)
+
+
+def folder_inputs(folder: str | Path) -> list[np.ndarray]:
+    """Model inputs from every image in `folder` (e.g. from `doctrpp crops --from-photos`)."""
+    paths = sorted(p for p in Path(folder).iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    paths = [p for p in paths if not p.stem.endswith("_flat")]
+    if not paths:
+        raise ValueError(f"{folder}: no calibration images")
+    return [model_input(read_image(p), contract.INPUT_SIZE) for p in paths]
+
+
+class CalibrationReader:
+    """onnxruntime's CalibrationDataReader protocol over model inputs."""
+
+    def __init__(self, inputs: Iterable[np.ndarray], input_name: str = contract.INPUT_NAME):
+        self.inputs = list(inputs)
+        self.input_name = input_name
+        self._position = 0
+
+    def get_next(self) -> dict[str, np.ndarray] | None:
+        if self._position >= len(self.inputs):
+            return None
+        batch = self.inputs[self._position]
+        self._position += 1
+        return {self.input_name: batch}
+
+    def rewind(self) -> None:
+        self._position = 0
