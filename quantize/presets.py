@@ -37,10 +37,12 @@ PRESETS: dict[str, QuantPreset] = {
     for p in (
         QuantPreset(
             "dynamic-linear",
-            "dynamic int8 MatMul/Gemm weights; activations quantised at run time",
+            "dynamic int8 linear layers (Gemm rewritten as MatMul); attention matmuls, "
+            "convolutions and head float; activations quantised at run time",
             mode="dynamic",
-            op_types=("MatMul", "Gemm"),
+            op_types=("MatMul",),
             per_channel=False,
+            matmul_weights_only=True,
         ),
         QuantPreset(
             "static-all",

@@ -62,6 +62,51 @@ def count_quantised_nodes(model: onnx.ModelProto, preset: QuantPreset) -> int:
     return sum(n.op_type in preset.op_types and n.input[0] in dequantised for n in model.graph.node)
 
 
+def gemm_to_matmul(model: onnx.ModelProto) -> int:
+    """Rewrite Gemm(x, W, b, transB=1) with constant W as MatMul(x, W^T) + b, in place.
+
+    onnxruntime's dynamic quantisation only handles MatMul; the exporter writes the
+    transformer's linear layers as Gemm. Returns how many were rewritten.
+    """
+    from onnx import helper, numpy_helper
+
+    weights = {i.name: i for i in model.graph.initializer}
+    rewritten = 0
+    nodes = []
+    for node in model.graph.node:
+        attrs = {a.name: helper.get_attribute_value(a) for a in node.attribute}
+        plain = attrs.get("alpha", 1.0) == 1.0 and attrs.get("beta", 1.0) == 1.0
+        if (
+            node.op_type != "Gemm"
+            or not plain
+            or attrs.get("transA", 0)
+            or node.input[1] not in weights
+        ):
+            nodes.append(node)
+            continue
+        weight = numpy_helper.to_array(weights[node.input[1]])
+        if attrs.get("transB", 0):
+            weight = weight.T
+        name = node.input[1] + "_matmul"
+        model.graph.initializer.append(numpy_helper.from_array(np.ascontiguousarray(weight), name))
+        product = node.output[0] + "_matmul" if len(node.input) > 2 else node.output[0]
+        nodes.append(helper.make_node("MatMul", [node.input[0], name], [product], name=node.name))
+        if len(node.input) > 2:
+            nodes.append(
+                helper.make_node(
+                    "Add", [product, node.input[2]], [node.output[0]], name=node.name + "_bias"
+                )
+            )
+        rewritten += 1
+    del model.graph.node[:]
+    model.graph.node.extend(nodes)
+    used = {name for node in model.graph.node for name in node.input}
+    kept = [i for i in model.graph.initializer if i.name in used]
+    del model.graph.initializer[:]
+    model.graph.initializer.extend(kept)
+    return rewritten
+
+
 def _preprocess(source: Path, target: Path) -> None:
     from onnxruntime.quantization.shape_inference import quant_pre_process
 
@@ -94,6 +139,8 @@ def quantise(
         prepared = Path(folder) / "prepared.onnx"
         _preprocess(fp32_path, prepared)
         prepared_model = onnx.load(str(prepared))
+        if preset.mode == "dynamic" and gemm_to_matmul(prepared_model):
+            onnx.save(prepared_model, str(prepared))
         chosen = eligible_nodes(prepared_model, preset)
         quantised_path = Path(folder) / "int8.onnx"
         if preset.mode == "dynamic":

@@ -1,0 +1,111 @@
+"""`doctrpp bench`: per model file, size, latency, memory and accuracy; one JSON record."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from doctrpp import contract
+from doctrpp.benchmarks.accuracy import predict
+from doctrpp.benchmarks.metrics import (
+    local_distortion_masked,
+    map_drift,
+    ms_ssim_masked,
+)
+from doctrpp.runtime.backends import open_backend
+from doctrpp.runtime.processing import model_input, photo_map, remap
+
+BENCH_SEED_OFFSET = 3_000_000_000
+
+
+@dataclass
+class Probe:
+    """One input of the accuracy set: a generated crop (with ground truth) or a real photo."""
+
+    name: str
+    kind: str  # complete | partial | none | photo
+    image: np.ndarray
+    backward_map: np.ndarray | None = None
+
+
+def generated_probes(per_kind: int) -> list[Probe]:
+    from doctrpp.udir.sample import generate, kind_for_index
+
+    probes = []
+    for i in range(3 * per_kind):
+        sample = generate(BENCH_SEED_OFFSET + i, kind_for_index(i))
+        probes.append(Probe(f"crop{i:03d}", sample.kind, sample.image, sample.backward_map))
+    return probes
+
+
+def photo_probes(folder: Path | None) -> list[Probe]:
+    """The user's photos, or the real document photos scikit-image ships, if installed."""
+    from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
+
+    if folder is not None:
+        paths = sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    else:
+        try:
+            import skimage
+        except ImportError:
+            return []
+        data = Path(skimage.__file__).parent / "data"
+        paths = [data / "page.png", data / "text.png"]
+    return [Probe(p.stem, "photo", read_image(p)) for p in paths if p.is_file()]
+
+
+def _rectify(image: np.ndarray, backward_map: np.ndarray) -> np.ndarray:
+    return remap(image, photo_map(backward_map, *image.shape[:2]))
+
+
+def _as_uint8_bgr(image: np.ndarray) -> np.ndarray:
+    if image.dtype == np.uint16:
+        image = (image // 257).astype(np.uint8)
+    return image
+
+
+def accuracy(model: Path, probes: list[Probe], reference_maps: list[np.ndarray] | None) -> dict:
+    """Drift and image metrics against the reference model's maps and against ground truth."""
+    inputs = [model_input(p.image, contract.INPUT_SIZE) for p in probes]
+    maps = predict(model, inputs)
+    rows: dict[str, dict[str, list[float]]] = {}
+
+    def add(group: str, metric: str, value: float) -> None:
+        rows.setdefault(group, {}).setdefault(metric, []).append(value)
+
+    for probe, bm, ref in zip(probes, maps, reference_maps or [None] * len(maps), strict=True):
+        image = _as_uint8_bgr(probe.image)
+        if ref is not None:
+            d = map_drift(bm, ref)
+            add(probe.kind, "drift_mean_px", d.mean_px)
+            add(probe.kind, "drift_max_px", d.max_px)
+            ours, theirs = _rectify(image, bm), _rectify(image, ref)
+            add(probe.kind, "ms_ssim_m_vs_ref", ms_ssim_masked(ours, theirs))
+            add(probe.kind, "ld_m_vs_ref", local_distortion_masked(ours, theirs))
+        if probe.backward_map is not None:
+            add(probe.kind, "gt_map_error_px", map_drift(bm, probe.backward_map).mean_px)
+            truth = _rectify(image, probe.backward_map)
+            add(probe.kind, "gt_ms_ssim_m", ms_ssim_masked(_rectify(image, bm), truth))
+    summary = {}
+    for group, metrics in rows.items():
+        summary[group] = {
+            k: float(np.max(v)) if k.endswith("max_px") else float(np.mean(v))
+            for k, v in metrics.items()
+        }
+    return {"per_kind": summary, "maps": maps}
+
+
+def describe(model: Path) -> dict:
+    backend = open_backend(model, 1)
+    meta = backend.metadata
+    return {
+        "name": model.name,
+        "path": str(model),
+        "format": model.suffix.lstrip(".").lower(),
+        "precision": meta.get(contract.META_PRECISION, "unknown"),
+        "file_mb": model.stat().st_size / 1e6,
+        "checkpoint_note": meta.get(contract.META_CHECKPOINT_NOTE, ""),
+        "checkpoint_sha256": meta.get(contract.META_CHECKPOINT_SHA256, ""),
+    }

@@ -1,0 +1,109 @@
+"""`doctrpp bench`: the FPS / accuracy-drop report over model files."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from doctrpp.errors import CliError
+
+
+def add_parser(commands: argparse._SubParsersAction) -> None:
+    p = commands.add_parser(
+        "bench",
+        help="FPS and accuracy-drop report (Markdown + JSON + plots)",
+        description="Benchmark model files: size, latency (median/p90, interleaved, 1 and 2 "
+        "threads), FPS, peak RSS, drift and MS-SSIM-M/LD-M against the reference (fp32) "
+        "model, and accuracy against ground truth on generated crops of each kind.",
+    )
+    p.add_argument("--models", type=Path, nargs="+", required=True, metavar="MODEL")
+    p.add_argument("--out", type=Path, required=True, help="report folder (created)")
+    p.add_argument("--reference", type=Path, help="model to compare against (default: first fp32)")
+    p.add_argument("--runs", type=int, default=20, help="timed runs per model and thread count")
+    p.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+    p.add_argument("--per-kind", type=int, default=10, help="generated crops per kind")
+    p.add_argument("--photos", type=Path, help="folder of real photos (default: scikit-image's)")
+    p.add_argument("--no-rss", action="store_true", help="skip the peak-memory subprocesses")
+    p.add_argument(
+        "--torch-checkpoint",
+        type=Path,
+        help="also time our PyTorch model with this checkpoint (needs [export])",
+    )
+    p.set_defaults(handler=run)
+
+
+def _status(message: str) -> None:
+    print(message, file=sys.stderr, flush=True)
+
+
+def run(args: argparse.Namespace) -> int:
+    from doctrpp import contract
+
+    from .bench import accuracy, describe, generated_probes, photo_probes
+    from .environment import environment
+    from .report import write_report
+    from .timing import interleaved_latency, peak_rss_mb
+
+    for model in args.models:
+        if not model.is_file():
+            raise CliError(f"{model}: no such model file")
+    if args.runs < 1 or args.per_kind < 0:
+        raise CliError("--runs must be >= 1 and --per-kind >= 0")
+    if args.photos and not args.photos.is_dir():
+        raise CliError(f"--photos {args.photos}: no such folder")
+    models = [describe(m) for m in args.models]
+    reference = args.reference or next(
+        (m for m, d in zip(args.models, models, strict=True) if d["precision"] == "fp32"),
+        args.models[0],
+    )
+    _status(f"reference model: {reference}")
+    probes = generated_probes(args.per_kind) + photo_probes(args.photos)
+    _status(f"accuracy inputs: {len(probes)}")
+    reference_result = accuracy(reference, probes, None)
+    notes = {d["checkpoint_note"] for d in models}
+    for record, path in zip(models, args.models, strict=True):
+        _status(f"accuracy: {path.name}")
+        result = accuracy(path, probes, reference_result["maps"])
+        record["accuracy"] = result["per_kind"]
+    _status(f"latency: {len(args.models)} models x {args.threads} threads x {args.runs} runs")
+    latencies = interleaved_latency(
+        list(args.models),
+        tuple(args.threads),
+        args.runs,
+        progress=lambda i, n: _status(f"  round {i}/{n}") if i % 5 == 0 else None,
+    )
+    ref_two = latencies.get((str(reference), max(args.threads)))
+    for record, path in zip(models, args.models, strict=True):
+        record["latency"] = {
+            str(t): {**latencies[(str(path), t)].__dict__, "fps": latencies[(str(path), t)].fps}
+            for t in args.threads
+        }
+        if ref_two:
+            record["latency_ratio"] = latencies[(str(path), max(args.threads))].median_ms / (
+                ref_two.median_ms
+            )
+        if not args.no_rss:
+            record["peak_rss_mb"] = peak_rss_mb(path, max(args.threads))
+    extra_rows = []
+    if args.torch_checkpoint:
+        from .torch_timing import torch_row
+
+        extra_rows.append(torch_row(args.torch_checkpoint, reference, max(args.threads), args.runs))
+    report = {
+        "environment": environment(),
+        "settings": {
+            "runs": args.runs,
+            "threads": args.threads,
+            "probes": f"{args.per_kind} generated crops per kind + "
+            f"{sum(p.kind == 'photo' for p in probes)} real photos",
+            "reference": str(reference),
+            "weights": "; ".join(sorted(n for n in notes if n)) or "unknown",
+            "input_size": contract.INPUT_SIZE,
+        },
+        "models": models,
+        "extra_rows": extra_rows,
+    }
+    written = write_report(report, args.out)
+    print(f"wrote {', '.join(str(args.out / w) for w in written)}")
+    return 0
