@@ -32,20 +32,31 @@ def _initializers(model: onnx.ModelProto) -> set[str]:
     return {i.name for i in model.graph.initializer}
 
 
+def attention_role(model: onnx.ModelProto) -> dict[str, str]:
+    """MatMuls of two activations: "values" if one input comes from a Softmax, else "scores"."""
+    constants = _initializers(model)
+    producer = {out: node.op_type for node in model.graph.node for out in node.output}
+    roles = {}
+    for node in model.graph.node:
+        if node.op_type == "MatMul" and node.input[1] not in constants:
+            from_softmax = any(producer.get(name) == "Softmax" for name in node.input)
+            roles[node.name] = "values" if from_softmax else "scores"
+    return roles
+
+
 def eligible_nodes(model: onnx.ModelProto, preset: QuantPreset) -> list[str]:
     """Names of the nodes the preset puts in int8."""
-    constants = _initializers(model)
+    roles = attention_role(model)
+    allowed_roles = {"int8": {"scores", "values"}, "scores": {"scores"}, "float": set()}
+    weights_only = preset.mode == "dynamic"  # dynamic mode quantises constant-B MatMuls only
     names = []
     for node in model.graph.node:
         if node.op_type not in preset.op_types:
             continue
         if any(pattern in node.name for pattern in preset.keep_float):
             continue
-        if (
-            node.op_type == "MatMul"
-            and preset.matmul_weights_only
-            and node.input[1] not in constants
-        ):
+        role = roles.get(node.name)
+        if role and (weights_only or role not in allowed_roles[preset.attention]):
             continue
         names.append(node.name)
     return names
@@ -174,9 +185,9 @@ def quantise(
                 nodes_to_quantize=chosen,
                 calibrate_method=method,
                 extra_options={
-                    "CalibMaxIntermediateOutputs": 4,  # bounded memory on 300+ inputs
+                    # No CalibMaxIntermediateOutputs: in onnxruntime 1.31 MinMax drops the
+                    # chunks it clears. MinMax keeps only per-tensor min/max per input anyway.
                     "ActivationSymmetric": preset.symmetric_activations,
-                    "MatMulConstBOnly": preset.matmul_weights_only,
                 },
             )
         model = onnx.load(str(quantised_path))

@@ -12,7 +12,7 @@ from doctrpp.quantize.quantize import quantise
 
 def test_bench_report(tiny_onnx, tmp_path):
     int8 = tmp_path / "tiny_int8.onnx"
-    quantise(tiny_onnx, int8, preset_by_name("static-body"), list(generated_inputs(3)))
+    quantise(tiny_onnx, int8, preset_by_name("static-weights"), list(generated_inputs(3)))
     out = tmp_path / "report"
     code = main(
         [

@@ -21,7 +21,7 @@ def calibration():
     return list(generated_inputs(6))
 
 
-@pytest.mark.parametrize("name", ["static-body", "dynamic-linear", "static-weights"])
+@pytest.mark.parametrize("name", ["static-weights", "dynamic-linear", "static-scores"])
 def test_presets_quantise_tiny_model(
     name, tiny_onnx, calibration, tmp_path, document_photo, report_difference
 ):
