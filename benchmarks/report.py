@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from doctrpp.runtime.imageio import write_bytes_atomically
+from doctrpp.files import write_bytes_atomically
 
 KINDS = ("complete", "partial", "none", "photo")
 

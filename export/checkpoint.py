@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import hashlib
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -19,14 +18,6 @@ UNUSED_MARKERS = (".multihead_attn_list.1.", ".norm2_list.1.")
 
 class CheckpointError(ValueError):
     """A checkpoint that does not fit the model; the message says why in one line."""
-
-
-def sha256_of(path: str | Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            digest.update(chunk)
-    return digest.hexdigest()
 
 
 def unwrap_state_dict(obj: object) -> dict[str, torch.Tensor]:

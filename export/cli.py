@@ -14,12 +14,15 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p = commands.add_parser(
         "export",
         help="export a checkpoint to ONNX",
-        description="Export a DocTr++ checkpoint to DIR/doctrpp_fp32.onnx (opset 17, "
-        "simplified, metadata inside) and check it against PyTorch.",
+        description="Export a DocTr++ checkpoint (default: the embedded trained weights) to "
+        "DIR/doctrpp_fp32.onnx (opset 17, simplified, metadata inside) and check it against "
+        "PyTorch.",
     )
-    source = p.add_mutually_exclusive_group(required=True)
+    source = p.add_mutually_exclusive_group()
     source.add_argument(
-        "--checkpoint", type=Path, help="state dict saved by the authors' code or ours"
+        "--checkpoint",
+        type=Path,
+        help="state dict saved by the authors' code or ours (default: the embedded weights)",
     )
     source.add_argument(
         "--random-weights",
@@ -35,52 +38,93 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=run)
 
 
-def run(args: argparse.Namespace) -> int:
-    require("torch", "onnx", "onnxslim", extra="export")
-    import numpy as np
+def load_source(checkpoint: Path | None, random_seed: int | None, config_name: str | None):
+    """(model, checkpoint sha256, note) from a checkpoint, random weights or the default."""
     import torch
 
-    from .checkpoint import CheckpointError, load_model, sha256_of
+    from doctrpp.files import sha256_of
+
+    from .checkpoint import CheckpointError, load_model
     from .config import config_by_name
+    from .default_weights import default_checkpoint
     from .model import DocTrPP
-    from .onnx_export import export_onnx, onnx_parity_px
 
     try:
-        config = config_by_name(args.config) if args.config else None
+        config = config_by_name(config_name) if config_name else None
     except ValueError as exc:
         raise CliError(str(exc)) from None
-    if args.out.exists() and not args.out.is_dir():
-        raise CliError(f"--out {args.out} exists and is not a folder")
-
-    if args.checkpoint is not None:
-        try:
-            model = load_model(args.checkpoint, config)
-        except CheckpointError as exc:
-            raise CliError(str(exc)) from None
-        sha256, note = sha256_of(args.checkpoint), f"checkpoint {args.checkpoint.name}"
-        print(f"loaded {args.checkpoint} (sha256 {sha256[:12]}...)")
-    else:
-        torch.manual_seed(args.random_weights)
+    if random_seed is not None:
+        torch.manual_seed(random_seed)
         model = DocTrPP(config) if config else DocTrPP()
-        model.eval()
-        sha256 = ""
-        note = f"RANDOM WEIGHTS (seed {args.random_weights}): not a trained model"
+        note = f"RANDOM WEIGHTS (seed {random_seed}): not a trained model"
         print(f"WARNING: exporting {note}; its output is not a meaningful rectification.")
+        return model.eval(), "", note
+    if checkpoint is None:
+        checkpoint = default_checkpoint()
+        if checkpoint is None:
+            raise CliError(
+                "this build ships no trained default weights; pass --checkpoint CKPT "
+                "(or --random-weights SEED for a smoke test)"
+            )
+        print(f"using the embedded default weights {checkpoint.name}")
+    try:
+        model = load_model(checkpoint, config)
+    except CheckpointError as exc:
+        raise CliError(str(exc)) from None
+    sha256 = sha256_of(checkpoint)
+    print(f"loaded {checkpoint} (sha256 {sha256[:12]}...)")
+    return model, sha256, f"checkpoint {checkpoint.name}"
 
-    out_path = args.out / "doctrpp_fp32.onnx"
-    result = export_onnx(model, out_path, checkpoint_sha256=sha256, checkpoint_note=note)
+
+def export_checked(model, out_dir: Path, sha256: str, note: str, check: bool = True) -> Path:
+    """Export to out_dir/doctrpp_fp32.onnx, print size and timing, and check parity."""
+    import numpy as np
+
+    from .onnx_export import export_onnx, onnx_parity_px
+
+    result = export_onnx(
+        model, out_dir / "doctrpp_fp32.onnx", checkpoint_sha256=sha256, checkpoint_note=note
+    )
     print(
         f"wrote {result.path}: {result.size_bytes / 1e6:.1f} MB, {result.node_count} nodes, "
         f"export took {result.seconds:.1f} s"
     )
-    if not args.no_check:
+    if check:
         images = np.random.default_rng(0).random((1, 3, 288, 288), dtype=np.float32)
         worst = onnx_parity_px(model, result.path, images)
-        status = "ok" if worst <= PARITY_TOLERANCE_PX else "FAILED"
+        ok = worst <= PARITY_TOLERANCE_PX
         print(
             f"parity ONNX vs PyTorch: largest difference {worst:.2e} px "
-            f"(tolerance {PARITY_TOLERANCE_PX:g} px) {status}"
+            f"(tolerance {PARITY_TOLERANCE_PX:g} px) {'ok' if ok else 'FAILED'}"
         )
-        if worst > PARITY_TOLERANCE_PX:
-            return 1
+        if not ok:
+            raise CliError(f"exported model differs from PyTorch by {worst:.2e} px")
+    return result.path
+
+
+def run(args: argparse.Namespace) -> int:
+    require("torch", "onnx", "onnxslim", extra="export")
+    if args.out.exists() and not args.out.is_dir():
+        raise CliError(f"--out {args.out} exists and is not a folder")
+    model, sha256, note = load_source(args.checkpoint, args.random_weights, args.config)
+    export_checked(model, args.out, sha256, note, check=not args.no_check)
     return 0
+
+
+def default_onnx() -> Path:
+    """The embedded default exported once to the cache folder (needs the [export] extra)."""
+    from .default_weights import cache_dir, default_checkpoint
+
+    checkpoint = default_checkpoint()
+    if checkpoint is None:
+        raise CliError("this build ships no trained default weights; pass --model MODEL.onnx")
+    from doctrpp.files import sha256_of
+
+    target = cache_dir() / sha256_of(checkpoint)[:16]
+    onnx_path = target / "doctrpp_fp32.onnx"
+    if not onnx_path.is_file():
+        require("torch", "onnx", "onnxslim", extra="export")
+        print(f"exporting the embedded default once to {target}")
+        model, sha256, note = load_source(checkpoint, None, None)
+        export_checked(model, target, sha256, note)
+    return onnx_path

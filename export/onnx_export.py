@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import io
-import os
-import tempfile
 import time
 import warnings
 from dataclasses import dataclass
@@ -14,6 +12,7 @@ import numpy as np
 import torch
 
 from doctrpp import contract
+from doctrpp.files import write_bytes_atomically
 
 from .metadata import model_metadata
 from .model import DocTrPP, ExportWrapper
@@ -86,19 +85,6 @@ def deduplicate_initializers(onnx_model) -> int:
     return len(renamed)
 
 
-def write_atomically(data: bytes, path: Path) -> None:
-    """Write next to the target and rename, so a crash never leaves half a file."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def export_onnx(
     model: DocTrPP,
     out_path: str | Path,
@@ -122,7 +108,7 @@ def export_onnx(
     onnx.checker.check_model(onnx_model)
     data = onnx_model.SerializeToString()
     out_path = Path(out_path)
-    write_atomically(data, out_path)
+    write_bytes_atomically(out_path, data)
     return ExportResult(
         path=out_path,
         seconds=time.perf_counter() - start,

@@ -139,7 +139,7 @@ def quantise(
         quantize_static,
     )
 
-    from doctrpp.runtime.imageio import write_bytes_atomically
+    from doctrpp.files import write_bytes_atomically
 
     start = time.perf_counter()
     fp32_path, out_path = Path(fp32_path), Path(out_path)

@@ -7,10 +7,11 @@ import sys
 from pathlib import Path
 
 from doctrpp.errors import CliError
+from doctrpp.files import save_npy_atomically
 from doctrpp.progress import progress
 
 from .backends import ModelError
-from .imageio import IMAGE_SUFFIXES, ImageError, read_image, save_npy_atomically, write_image
+from .imageio import IMAGE_SUFFIXES, ImageError, read_image, write_image
 
 
 def add_parser(commands: argparse._SubParsersAction) -> None:
@@ -22,7 +23,12 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "image path. Inputs are never overwritten.",
     )
     p.add_argument("inputs", nargs="+", type=Path, metavar="INPUT")
-    p.add_argument("--model", type=Path, required=True, help="model file (.onnx)")
+    p.add_argument(
+        "--model",
+        type=Path,
+        help="model file (.onnx); default: the embedded weights, exported once to a cache "
+        "folder (needs the [export] extra)",
+    )
     p.add_argument("-o", "--out", type=Path, required=True, help="output folder or image path")
     p.add_argument(
         "--save-map",
@@ -84,6 +90,10 @@ def run(args: argparse.Namespace) -> int:
         if target.resolve() in resolved_inputs:
             raise CliError(f"output {target} would overwrite an input")
 
+    if args.model is None:
+        from doctrpp.export.cli import default_onnx
+
+        args.model = default_onnx()
     try:
         rectifier = Rectifier(args.model, threads=args.threads)
     except ModelError as exc:

@@ -130,3 +130,30 @@ def test_rectify_errors(tiny_onnx, photos, tmp_path, capsys):
     )
     err = capsys.readouterr().err
     assert "no such file or folder" in err and "model not found" in err
+
+
+def test_embedded_default_used_without_checkpoint_or_model(
+    tiny_model, photos, tmp_path, monkeypatch, capsys
+):
+    import torch
+
+    ckpt = tmp_path / "default.pt"
+    torch.save({"model": tiny_model.state_dict(), "config": {"hidden_dim": 32, "num_heads": 2,
+               "ffn_dim": 64, "layers_per_block": 1, "backbone_widths": [8, 16, 24]}}, ckpt)
+    monkeypatch.setenv("DOCTRPP_DEFAULT_WEIGHTS", str(ckpt))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    assert main(["export", "--out", str(tmp_path / "exported")]) == 0
+    assert "embedded default" in capsys.readouterr().out
+    out = tmp_path / "r.png"
+    assert main(["rectify", str(photos / "a.jpg"), "-o", str(out)]) == 0
+    assert out.is_file()
+    assert list((tmp_path / "cache").rglob("doctrpp_fp32.onnx"))
+
+
+def test_no_default_weights_is_a_clear_error(monkeypatch, tmp_path, capsys):
+    from doctrpp.export import default_weights
+
+    monkeypatch.delenv("DOCTRPP_DEFAULT_WEIGHTS", raising=False)
+    monkeypatch.setattr(default_weights, "WEIGHTS_DIR", tmp_path)
+    assert main(["export", "--out", str(tmp_path / "o")]) == 2
+    assert "no trained default weights" in capsys.readouterr().err

@@ -10,7 +10,8 @@ import torch
 
 from doctrpp.export.checkpoint import load_model
 from doctrpp.export.config import TINY
-from doctrpp.runtime.imageio import save_npy_atomically, write_image
+from doctrpp.files import save_npy_atomically
+from doctrpp.runtime.imageio import write_image
 from doctrpp.training.data import GeneratedCrops, StreamSampler, hsv_jitter
 from doctrpp.training.loop import TrainSettings, train
 from doctrpp.udir.sample import generate

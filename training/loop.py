@@ -18,7 +18,7 @@ from torch.utils.data import DataLoader
 
 from doctrpp.export.config import ModelConfig
 from doctrpp.export.model import DocTrPP
-from doctrpp.runtime.imageio import write_bytes_atomically
+from doctrpp.files import write_bytes_atomically
 
 from .data import FolderCrops, GeneratedCrops, StreamSampler
 from .validate import identity_scores, predict_maps, score_maps, validation_set

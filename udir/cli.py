@@ -12,15 +12,9 @@ import cv2
 import numpy as np
 
 from doctrpp.errors import CliError
+from doctrpp.files import save_npy_atomically, write_bytes_atomically
 from doctrpp.progress import progress
-from doctrpp.runtime.imageio import (
-    IMAGE_SUFFIXES,
-    ImageError,
-    read_image,
-    save_npy_atomically,
-    write_bytes_atomically,
-    write_image,
-)
+from doctrpp.runtime.imageio import IMAGE_SUFFIXES, ImageError, read_image, write_image
 
 from .scene import KINDS
 
