@@ -75,3 +75,26 @@ def test_hsv_jitter_keeps_shape():
     out = hsv_jitter(image, np.random.default_rng(0))
     assert out.shape == image.shape and out.dtype == np.uint8
     assert not np.array_equal(out, image)
+
+
+def test_restart_schedule_runs_a_new_cycle(tmp_path):
+    data = tmp_path / "data"
+    sample = generate(0, "none")
+    write_image(data / "00000.png", sample.image)
+    save_npy_atomically(data / "00000_map.npy", sample.backward_map)
+    run = tmp_path / "run"
+    settings = TrainSettings(
+        out=run,
+        config=TINY,
+        steps=4,
+        batch=1,
+        workers=0,
+        threads=2,
+        validate_every=100,
+        validation_size=3,
+        data_folder=data,
+    )
+    assert train(settings)["step"] == 4
+    again = dataclasses.replace(settings, steps=3, resume=run / "last.pth", restart_schedule=True)
+    state = train(again)
+    assert state["step"] == 7 and state["schedule_start"] == 4

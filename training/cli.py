@@ -26,6 +26,11 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--resume", type=Path, help="checkpoint to continue from (e.g. RUN_DIR/last.pth)"
     )
+    p.add_argument(
+        "--restart-schedule",
+        action="store_true",
+        help="with --resume: keep weights and optimiser, run a new OneCycle of --steps",
+    )
     p.add_argument("--data", type=Path, help="train on a folder from `doctrpp crops` instead")
     p.add_argument("--workers", type=int, default=1, help="data generator processes")
     p.add_argument("--threads", type=int, help="torch threads per process")
@@ -72,6 +77,7 @@ def run(args: argparse.Namespace) -> int:
         max_minutes=args.max_minutes,
         stop_at=args.stop_at,
         resume=args.resume,
+        restart_schedule=args.restart_schedule,
         seed=args.seed,
     )
     state = train(settings)

@@ -43,6 +43,7 @@ class TrainSettings:
     max_minutes: float | None = None  # stop cleanly (with a checkpoint) after this long
     stop_at: int | None = None  # stop after this step (the schedule still spans `steps`)
     resume: Path | None = None
+    restart_schedule: bool = False  # on resume: keep weights/optimiser, start a new lr cycle
     seed: int = 0
 
 
@@ -97,9 +98,8 @@ class RunLog:
             f.write(json.dumps(record) + "\n")
 
 
-def _optimiser(model, s: TrainSettings):
-    optimiser = torch.optim.AdamW(model.parameters(), lr=s.max_lr, weight_decay=s.weight_decay)
-    schedule = torch.optim.lr_scheduler.OneCycleLR(
+def _schedule(optimiser, s: TrainSettings):
+    return torch.optim.lr_scheduler.OneCycleLR(
         # +1: the scheduler counts its construction as a step; s.steps updates follow.
         optimiser,
         max_lr=s.max_lr,
@@ -107,7 +107,6 @@ def _optimiser(model, s: TrainSettings):
         pct_start=s.warmup,
         anneal_strategy="linear",
     )
-    return optimiser, schedule
 
 
 def train(s: TrainSettings) -> dict:
@@ -117,7 +116,8 @@ def train(s: TrainSettings) -> dict:
     torch.manual_seed(s.seed)
     s.out.mkdir(parents=True, exist_ok=True)
     model = DocTrPP(s.config).to(env.device).train()
-    optimiser, schedule = _optimiser(model, s)
+    optimiser = torch.optim.AdamW(model.parameters(), lr=s.max_lr, weight_decay=s.weight_decay)
+    schedule = _schedule(optimiser, s)
     state = {
         "step": 0,
         "samples_seen": 0,
@@ -129,8 +129,12 @@ def train(s: TrainSettings) -> dict:
         ckpt = torch.load(s.resume, map_location=env.device, weights_only=True)
         model.load_state_dict(ckpt["model"])
         optimiser.load_state_dict(ckpt["optimizer"])
-        schedule.load_state_dict(ckpt["scheduler"])
         state.update(ckpt["train_state"])
+        if s.restart_schedule:  # a fresh cycle (and --lr) from the current step
+            state["schedule_start"] = state["step"]
+            schedule = _schedule(optimiser, s)
+        else:
+            schedule.load_state_dict(ckpt["scheduler"])
     net = model
     if env.world > 1:
         net = torch.nn.parallel.DistributedDataParallel(
@@ -193,7 +197,8 @@ def train(s: TrainSettings) -> dict:
     last_time = time.time()
     first_step = state["step"]
     batches = iter(loader)
-    last_step = min(s.steps, s.stop_at or s.steps)
+    schedule_end = state.get("schedule_start", 0) + s.steps
+    last_step = min(schedule_end, s.stop_at or schedule_end)
     while state["step"] < last_step and not stop["now"]:
         images, targets = next(batches)
         images, targets = images.to(env.device), targets.to(env.device)
