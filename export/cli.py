@@ -34,7 +34,19 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--config", help="model config preset (default: from the checkpoint, else reference)"
     )
-    p.add_argument("--no-check", action="store_true", help="skip the ONNX vs PyTorch parity check")
+    p.add_argument("--format", choices=["onnx", "tflite"], default="onnx")
+    p.add_argument(
+        "--precision",
+        choices=["fp32", "fp16", "int8"],
+        default="fp32",
+        help="tflite only (ONNX int8: `doctrpp quantize`)",
+    )
+    calib = p.add_mutually_exclusive_group()
+    calib.add_argument("--calib", type=Path, metavar="FOLDER", help="int8 calibration images")
+    calib.add_argument(
+        "--calib-synthetic", type=int, default=100, metavar="N", help="generated crops (100)"
+    )
+    p.add_argument("--no-check", action="store_true", help="skip the parity check vs PyTorch")
     p.set_defaults(handler=run)
 
 
@@ -102,12 +114,70 @@ def export_checked(model, out_dir: Path, sha256: str, note: str, check: bool = T
     return result.path
 
 
+def export_tflite_checked(model, args, sha256: str, note: str) -> Path:
+    """Export .tflite at args.precision and report its difference to PyTorch."""
+    import numpy as np
+
+    from doctrpp.benchmarks.accuracy import predict
+
+    from .model import ExportWrapper
+    from .tflite_export import export_tflite
+
+    calibration = None
+    if args.precision == "int8":
+        from doctrpp.quantize.calibration import folder_inputs, generated_inputs
+
+        try:
+            calibration = (
+                folder_inputs(args.calib)
+                if args.calib
+                else list(generated_inputs(args.calib_synthetic))
+            )
+        except (OSError, ValueError) as exc:
+            raise CliError(str(exc)) from None
+    out = args.out / f"doctrpp_{args.precision}.tflite"
+    result = export_tflite(model, out, args.precision, calibration, sha256, note)
+    print(
+        f"wrote {result.path}: {result.size_bytes / 1e6:.1f} MB, export took {result.seconds:.1f} s"
+    )
+    if not args.no_check:
+        import torch
+
+        from doctrpp.quantize.calibration import generated_inputs
+
+        inputs = list(generated_inputs(3, seed_offset=2_200_000_000))
+        with torch.no_grad():
+            expected = [
+                ExportWrapper(model)(torch.from_numpy(x)).numpy()[0].transpose(1, 2, 0)
+                for x in inputs
+            ]
+        got = predict(out, inputs)
+        from doctrpp.benchmarks.metrics import map_drift
+
+        worst = max(map_drift(a, b).max_px for a, b in zip(got, expected, strict=True))
+        tolerance = PARITY_TOLERANCE_PX if args.precision == "fp32" else float("inf")
+        print(
+            f"{args.precision} TFLite vs PyTorch: largest difference {worst:.2e} px"
+            + (f" (tolerance {tolerance:g} px)" if args.precision == "fp32" else "")
+        )
+        if worst > tolerance or not np.isfinite(worst):
+            raise CliError(f"exported model differs from PyTorch by {worst:.2e} px")
+    return out
+
+
 def run(args: argparse.Namespace) -> int:
     require("torch", "onnx", "onnxslim", extra="export")
     if args.out.exists() and not args.out.is_dir():
         raise CliError(f"--out {args.out} exists and is not a folder")
+    if args.format == "onnx" and args.precision != "fp32":
+        raise CliError("ONNX export is fp32; make int8 with `doctrpp quantize`")
+    if args.format == "tflite":
+        require("litert_torch", "ai_edge_litert", extra="tflite-export")
     model, sha256, note = load_source(args.checkpoint, args.random_weights, args.config)
-    export_checked(model, args.out, sha256, note, check=not args.no_check)
+    if args.format == "tflite":
+        export_tflite_checked(model, args, sha256, note)
+    else:
+        export_checked(model, args.out, sha256, note, check=not args.no_check)
     return 0
 
 

@@ -36,7 +36,10 @@ def _trace_to_onnx(model: DocTrPP) -> bytes:
         # Instance norm without running stats is exactly what we want; silence the notice.
         warnings.filterwarnings("ignore", message=".*instance_norm.*")
         warnings.filterwarnings("ignore", category=torch.jit.TracerWarning)
-        warnings.filterwarnings("ignore", category=DeprecationWarning)  # legacy exporter, chosen
+        warnings.filterwarnings("ignore", category=DeprecationWarning)
+        warnings.filterwarnings(
+            "ignore", category=UserWarning, module="torch.onnx"
+        )  # legacy exporter, chosen
         torch.onnx.export(
             wrapper,
             (dummy,),

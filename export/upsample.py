@@ -2,8 +2,10 @@
 
 RAFT's convex upsampling views the mask as a 7-D tensor and gathers neighbours with
 `Unfold`; neither legalises well for ONNX/TFLite. Here the 3x3 neighbourhood is
-gathered by a fixed one-hot convolution, the softmax runs on a 4-D view and the 8x8
-sub-pixels are placed by depth-to-space (`pixel_shuffle`). Same function, at most 4-D.
+gathered by nine shifted slices of the zero-padded flow (a fixed one-hot convolution
+computes the same but trips the TFLite int8 converter's same-scale rule), the softmax
+runs on a 4-D view and the 8x8 sub-pixels are placed by depth-to-space
+(`pixel_shuffle`). Same function, at most 4-D.
 """
 
 from __future__ import annotations
@@ -42,29 +44,27 @@ class UpdateBlock(nn.Module):
         return 0.25 * self.mask(features), self.flow_head(features)
 
 
-def neighbour_kernel() -> torch.Tensor:
-    """One-hot 3x3 kernels, (9, 1, 3, 3): output channel k copies neighbour k."""
-    return torch.eye(NEIGHBOURS, dtype=torch.float32).reshape(NEIGHBOURS, 1, 3, 3)
+def neighbours_3x3(x: torch.Tensor) -> torch.Tensor:
+    """(N, 1, H, W) -> (N, 9, H, W): the 3x3 neighbours (zero outside), row-major."""
+    h, w = x.shape[-2:]
+    padded = F.pad(x, (1, 1, 1, 1))
+    return torch.cat(
+        [padded[:, :, dy : dy + h, dx : dx + w] for dy in range(3) for dx in range(3)], dim=1
+    )
 
 
 class ConvexUpsample(nn.Module):
-    def __init__(self) -> None:
-        super().__init__()
-        # Applied per flow channel (groups=2), zero padding as Unfold's.
-        self.register_buffer("kernel", neighbour_kernel().repeat(2, 1, 1, 1), persistent=False)
-
     def forward(self, flow: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
         """flow (N, 2, H, W) and mask (N, 576, H, W) -> flow (N, 2, 8H, 8W)."""
         n, _, h, w = flow.shape
         sub = UPSAMPLE * UPSAMPLE
         weights = torch.softmax(mask.reshape(n, NEIGHBOURS, sub, h * w), dim=1)
         # 8.0 (a float) keeps the multiply in float for the TFLite int8 converter.
-        neighbours = F.conv2d(8.0 * flow, self.kernel, padding=1, groups=2)
-        neighbours = neighbours.reshape(n, 2, NEIGHBOURS, h * w)
-        channels = [
-            (weights * neighbours[:, c].unsqueeze(2)).sum(dim=1)  # (N, 64, H*W)
-            for c in range(2)
-        ]
+        scaled = 8.0 * flow
+        channels = []
+        for c in range(2):
+            neighbours = neighbours_3x3(scaled[:, c : c + 1]).reshape(n, NEIGHBOURS, 1, h * w)
+            channels.append((weights * neighbours).sum(dim=1))  # (N, 64, H*W)
         up = torch.cat(channels, dim=1).reshape(n, 2 * sub, h, w)
         return F.pixel_shuffle(up, UPSAMPLE)
 
