@@ -166,10 +166,10 @@ def random_surface(
     if style in ("curl", "cone", "combined"):
         kw.update(
             curl_angle=float(rng.choice([0.0, np.pi / 2]) + rng.normal(0, 0.15)),
-            curl_amplitude=float(rng.uniform(0.02, 0.12)),
+            curl_amplitude=float(rng.uniform(0.03, 0.16)),
             curl_frequency=float(rng.uniform(1.5, 5.0)),
             curl_phase=float(rng.uniform(0, 2 * np.pi)),
-            curl_quadratic=float(rng.uniform(-0.25, 0.25)),
+            curl_quadratic=float(rng.uniform(-0.45, 0.45)),
         )
         if style == "cone" or rng.random() < 0.3:
             kw["cone"] = float(rng.uniform(-1.2, 1.2))
