@@ -11,6 +11,7 @@ from doctrpp.errors import CliError
 
 def build_parser() -> argparse.ArgumentParser:
     from doctrpp.benchmarks import cli as bench_cli
+    from doctrpp.bundle import cli as bundle_cli
     from doctrpp.export import cli as export_cli
     from doctrpp.quantize import cli as quantize_cli
     from doctrpp.runtime import cli as runtime_cli
@@ -29,6 +30,7 @@ def build_parser() -> argparse.ArgumentParser:
     udir_cli.add_parser(commands)
     training_cli.add_parser(commands)
     bench_cli.add_parser(commands)
+    bundle_cli.add_parser(commands)
     return parser
 
 

@@ -1,0 +1,1 @@
+"""`doctrpp bundle`: model files + a machine-readable contract + platform notes for apps."""
