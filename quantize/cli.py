@@ -37,6 +37,12 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         help=f"recipe (default {DEFAULT_PRESET})",
     )
     p.add_argument(
+        "--sensitivity",
+        type=Path,
+        metavar="JSON",
+        help="instead of one model, rank node groups by the drift each causes alone",
+    )
+    p.add_argument(
         "--check",
         type=int,
         default=12,
@@ -73,6 +79,8 @@ def run(args: argparse.Namespace) -> int:
         except (OSError, ValueError) as exc:
             raise CliError(str(exc)) from None
         print(f"calibrating on {len(calibration)} inputs ({args.calib or 'generated crops'})")
+    if args.sensitivity:
+        return _sensitivity(args, preset, calibration)
     try:
         result = quantise(args.model, args.out, preset, calibration)
     except Exception as exc:  # onnxruntime/onnx raise many types for bad models
@@ -92,4 +100,31 @@ def run(args: argparse.Namespace) -> int:
             f"drift vs fp32 on {args.check} generated crops: mean {summary.mean_px:.3f} px, "
             f"max {summary.max_px:.3f} px"
         )
+    return 0
+
+
+def _sensitivity(args: argparse.Namespace, preset, calibration) -> int:
+    import json
+
+    from doctrpp.files import write_bytes_atomically
+
+    from .calibration import generated_inputs
+    from .sensitivity import rank_groups
+
+    held_out = list(generated_inputs(max(args.check, 3), seed_offset=2_100_000_000))
+    ranking = rank_groups(
+        args.model,
+        preset,
+        calibration,
+        held_out,
+        progress=lambda i, n, g: print(f"[{i}/{n}] {g}", flush=True),
+    )
+    write_bytes_atomically(args.sensitivity, json.dumps(ranking, indent=1).encode())
+    print(f"{'group':48s} nodes  mean px  max px")
+    for row in ranking:
+        print(
+            f"{row['group']:48s} {row['nodes']:5d}  {row['drift_mean_px']:7.3f}  "
+            f"{row['drift_max_px']:6.3f}"
+        )
+    print(f"wrote {args.sensitivity}")
     return 0

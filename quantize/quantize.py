@@ -129,6 +129,7 @@ def quantise(
     out_path: str | Path,
     preset: QuantPreset,
     calibration: list[np.ndarray] | None = None,
+    only_nodes: list[str] | None = None,
 ) -> QuantResult:
     """Quantise `fp32_path` into `out_path` (written atomically); metadata is carried over."""
     from onnxruntime.quantization import (
@@ -153,6 +154,8 @@ def quantise(
         if preset.mode == "dynamic" and gemm_to_matmul(prepared_model):
             onnx.save(prepared_model, str(prepared))
         chosen = eligible_nodes(prepared_model, preset)
+        if only_nodes is not None:  # a subset, e.g. for the sensitivity ranking
+            chosen = [name for name in chosen if name in set(only_nodes)]
         quantised_path = Path(folder) / "int8.onnx"
         if preset.mode == "dynamic":
             quantize_dynamic(

@@ -78,3 +78,18 @@ def test_quantize_cli(tiny_onnx, tmp_path, capsys):
     assert "drift vs fp32" in capsys.readouterr().out
     assert main(["quantize", "--model", str(tiny_onnx), "--out", str(tiny_onnx)]) == 2
     assert main(["quantize", "--model", str(tmp_path / "absent.onnx"), "--out", str(out)]) == 2
+
+
+def test_sensitivity_ranks_groups(tiny_onnx, tmp_path, capsys):
+    import json
+
+    out = tmp_path / "sens.json"
+    code = main(["quantize", "--model", str(tiny_onnx), "--out", str(tmp_path / "x.onnx"),
+                 "--preset", "static-weights", "--calib-synthetic", "2", "--check", "2",
+                 "--sensitivity", str(out)])
+    assert code == 0
+    ranking = json.loads(out.read_text())
+    assert len(ranking) >= 3
+    drifts = [r["drift_mean_px"] for r in ranking]
+    assert drifts == sorted(drifts, reverse=True)
+    assert any(r["group"].startswith("/model/fnet") for r in ranking)
