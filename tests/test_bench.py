@@ -41,6 +41,7 @@ def test_bench_report(tiny_onnx, tmp_path):
     markdown = (out / "report.md").read_text()
     assert "| tiny_int8.onnx | onnx | int8 |" in markdown
     assert "allocator" in markdown
+    assert (out / "latency.png").is_file() and (out / "drift_vs_latency.png").is_file()
 
 
 def test_bench_errors(tmp_path):
