@@ -24,6 +24,7 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     p.add_argument("--per-kind", type=int, default=10, help="generated crops per kind")
     p.add_argument("--photos", type=Path, help="folder of real photos (default: scikit-image's)")
+    p.add_argument("--note", help="a line for the report (e.g. which weights these are)")
     p.add_argument("--no-rss", action="store_true", help="skip the peak-memory subprocesses")
     p.add_argument(
         "--torch-checkpoint",
@@ -100,6 +101,7 @@ def run(args: argparse.Namespace) -> int:
             "reference": str(reference),
             "weights": "; ".join(sorted(n for n in notes if n)) or "unknown",
             "input_size": contract.INPUT_SIZE,
+            "note": args.note or "",
         },
         "models": models,
         "extra_rows": extra_rows,

@@ -31,6 +31,7 @@ def markdown(report: dict) -> str:
         f"- accuracy inputs: {report['settings']['probes']}; reference model: "
         f"{report['settings']['reference']}",
         f"- weights: {report['settings']['weights']}",
+        *([f"- note: {report['settings']['note']}"] if report["settings"].get("note") else []),
         "",
         "## Speed and size",
         "",

@@ -53,15 +53,19 @@ def interleaved_latency(
     }
 
 
+# VmHWM of the child's own address space: ru_maxrss would carry over the parent's peak
+# across fork + exec on Linux.
 _RSS_PROBE = """
-import json, resource, sys
+import json, sys
 import numpy as np
 from doctrpp.runtime.backends import open_backend
 backend = open_backend(sys.argv[1], int(sys.argv[2]))
 x = np.zeros((1, 3, 288, 288), np.float32)
 for _ in range(3):
     backend.run(x)
-print(json.dumps(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss))
+with open("/proc/self/status") as f:
+    peak_kb = next(int(line.split()[1]) for line in f if line.startswith("VmHWM:"))
+print(json.dumps(peak_kb))
 """
 
 
@@ -74,4 +78,4 @@ def peak_rss_mb(model: Path, threads: int = 2) -> float:
         check=True,
         timeout=600,
     )
-    return json.loads(done.stdout.strip().splitlines()[-1]) / 1024.0  # kB on Linux
+    return json.loads(done.stdout.strip().splitlines()[-1]) / 1024.0

@@ -194,6 +194,9 @@ def quantise(
                 },
             )
         model = onnx.load(str(quantised_path))
+    from doctrpp.export.onnx_export import deduplicate_initializers
+
+    deduplicate_initializers(model)  # shared scales and zero points
     metadata[contract.META_PRECISION] = "int8"
     metadata["doctrpp.quant_preset"] = json.dumps(asdict(preset), sort_keys=True)
     del model.metadata_props[:]
