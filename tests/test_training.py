@@ -98,3 +98,49 @@ def test_restart_schedule_runs_a_new_cycle(tmp_path):
     again = dataclasses.replace(settings, steps=3, resume=run / "last.pth", restart_schedule=True)
     state = train(again)
     assert state["step"] == 7 and state["schedule_start"] == 4
+
+
+def test_torchrun_ddp_on_cpu(tmp_path):
+    """Two processes with the gloo backend: the same code path as several GPUs/nodes."""
+    import subprocess
+    import sys
+
+    run = tmp_path / "ddp"
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "torch.distributed.run",
+            "--nproc_per_node",
+            "2",
+            "--master_port",
+            "29533",
+            "-m",
+            "doctrpp",
+            "train",
+            "--out",
+            str(run),
+            "--config",
+            "tiny",
+            "--steps",
+            "2",
+            "--batch",
+            "1",
+            "--workers",
+            "0",
+            "--threads",
+            "1",
+            "--validation-size",
+            "3",
+            "--validate-every",
+            "2",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        cwd=tmp_path,
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    state = torch.load(run / "last.pth", weights_only=True)["train_state"]
+    assert state["step"] == 2 and state["samples_seen"] == 4  # 2 steps x 1 x 2 processes
+    assert done.stdout.count("stopped at step 2") == 1  # rank 0 reports

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 
 from doctrpp.errors import CliError, require
@@ -81,6 +82,8 @@ def run(args: argparse.Namespace) -> int:
         seed=args.seed,
     )
     state = train(settings)
+    if os.environ.get("RANK", "0") != "0":
+        return 0
     print(
         f"stopped at step {state['step']} ({state['samples_seen']} samples, "
         f"{state['cpu_seconds'] / 3600:.2f} CPU hours); checkpoint {args.out / 'last.pth'}"
