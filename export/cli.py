@@ -125,14 +125,10 @@ def export_tflite_checked(model, args, sha256: str, note: str) -> Path:
 
     calibration = None
     if args.precision == "int8":
-        from doctrpp.quantize.calibration import folder_inputs, generated_inputs
+        from doctrpp.quantize.calibration import load_calibration
 
         try:
-            calibration = (
-                folder_inputs(args.calib)
-                if args.calib
-                else list(generated_inputs(args.calib_synthetic))
-            )
+            calibration = load_calibration(args.calib, args.calib_synthetic)
         except (OSError, ValueError) as exc:
             raise CliError(str(exc)) from None
     out = args.out / f"doctrpp_{args.precision}.tflite"

@@ -51,3 +51,8 @@ class CalibrationReader:
 
     def rewind(self) -> None:
         self._position = 0
+
+
+def load_calibration(folder: str | Path | None, synthetic: int) -> list[np.ndarray]:
+    """The user's images when `folder` is given, else `synthetic` generated crops."""
+    return folder_inputs(folder) if folder else list(generated_inputs(synthetic))

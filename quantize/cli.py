@@ -57,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
     from doctrpp.benchmarks.accuracy import drift, predict
     from doctrpp.runtime.backends import ModelError
 
-    from .calibration import folder_inputs, generated_inputs
+    from .calibration import generated_inputs, load_calibration
     from .presets import preset_by_name
     from .quantize import quantise
 
@@ -71,11 +71,7 @@ def run(args: argparse.Namespace) -> int:
     calibration = None
     if preset.mode == "static":
         try:
-            calibration = (
-                folder_inputs(args.calib)
-                if args.calib
-                else list(generated_inputs(args.calib_synthetic))
-            )
+            calibration = load_calibration(args.calib, args.calib_synthetic)
         except (OSError, ValueError) as exc:
             raise CliError(str(exc)) from None
         print(f"calibrating on {len(calibration)} inputs ({args.calib or 'generated crops'})")

@@ -50,6 +50,20 @@ def tiny_model():
 
 
 @pytest.fixture(scope="session")
+def tiny_checkpoint(tiny_model, tmp_path_factory) -> Path:
+    """The tiny model saved as our trainer does: state dict + recorded config."""
+    import dataclasses
+
+    import torch
+
+    path = tmp_path_factory.mktemp("ckpt") / "tiny.pt"
+    torch.save(
+        {"model": tiny_model.state_dict(), "config": dataclasses.asdict(tiny_model.config)}, path
+    )
+    return path
+
+
+@pytest.fixture(scope="session")
 def tiny_onnx(tiny_model, tmp_path_factory) -> Path:
     from doctrpp.export.onnx_export import export_onnx
 

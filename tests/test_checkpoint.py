@@ -42,24 +42,10 @@ def test_file_round_trip_reference(make_ckpt, tmp_path):
     assert not model.training
 
 
-def test_tiny_round_trip_with_recorded_config(tiny_model, tmp_path):
-    path = tmp_path / "tiny.pth"
-    torch.save(
-        {
-            "model": tiny_model.state_dict(),
-            "config": {
-                "hidden_dim": 32,
-                "num_heads": 2,
-                "ffn_dim": 64,
-                "layers_per_block": 1,
-                "backbone_widths": [8, 16, 24],
-            },
-        },
-        path,
-    )
-    _, config = read_checkpoint(path)
+def test_tiny_round_trip_with_recorded_config(tiny_checkpoint):
+    _, config = read_checkpoint(tiny_checkpoint)
     assert config == TINY
-    assert load_model(path).config == TINY
+    assert load_model(tiny_checkpoint).config == TINY
 
 
 def test_missing_and_mismatched_keys_named(tiny_model, tmp_path):

@@ -133,24 +133,9 @@ def test_rectify_errors(tiny_onnx, photos, tmp_path, capsys):
 
 
 def test_embedded_default_used_without_checkpoint_or_model(
-    tiny_model, photos, tmp_path, monkeypatch, capsys
+    tiny_checkpoint, photos, tmp_path, monkeypatch, capsys
 ):
-    import torch
-
-    ckpt = tmp_path / "default.pt"
-    torch.save(
-        {
-            "model": tiny_model.state_dict(),
-            "config": {
-                "hidden_dim": 32,
-                "num_heads": 2,
-                "ffn_dim": 64,
-                "layers_per_block": 1,
-                "backbone_widths": [8, 16, 24],
-            },
-        },
-        ckpt,
-    )
+    ckpt = tiny_checkpoint
     monkeypatch.setenv("DOCTRPP_DEFAULT_WEIGHTS", str(ckpt))
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
     assert main(["export", "--out", str(tmp_path / "exported")]) == 0
