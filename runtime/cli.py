@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from doctrpp import contract
 from doctrpp.errors import CliError
 from doctrpp.files import save_npy_atomically
 from doctrpp.progress import progress
@@ -98,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
         rectifier = Rectifier(args.model, threads=args.threads)
     except ModelError as exc:
         raise CliError(str(exc)) from None
-    note = rectifier.metadata.get("doctrpp.checkpoint_note", "")
+    note = rectifier.metadata.get(contract.META_CHECKPOINT_NOTE, "")
     if "RANDOM" in note.upper():
         print(f"WARNING: {args.model} holds {note}", file=sys.stderr)
 
