@@ -150,3 +150,16 @@ def test_runtime_never_imports_torch(tiny_onnx):
         "assert 'torch' not in sys.modules, 'torch was imported'\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True, cwd=tiny_onnx.parent)
+
+
+def test_outputs_get_the_usual_file_mode(tmp_path):
+    import os
+    import stat
+
+    from doctrpp.files import write_bytes_atomically
+
+    target = tmp_path / "x.bin"
+    write_bytes_atomically(target, b"data")
+    mask = os.umask(0)
+    os.umask(mask)
+    assert stat.S_IMODE(target.stat().st_mode) == 0o666 & ~mask

@@ -74,7 +74,7 @@ def apply_lighting(look: Look, image: np.ndarray) -> np.ndarray:
         # A half-plane shadow through two points, with a soft edge.
         side = (x1 - x0) * (yy - y0) - (y1 - y0) * (xx - x0)
         side /= np.hypot(x1 - x0, y1 - y0) + 1e-6
-        inside = 1 / (1 + np.exp(-side / max(softness, 1e-3)))
+        inside = 0.5 * (1 + np.tanh(side / (2 * max(softness, 1e-3))))  # sigmoid, no overflow
         factor = factor * (1 - (1 - strength) * inside)
     out = image * factor[..., None]
     if look.highlight:
