@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -71,11 +72,13 @@ print(json.dumps(peak_kb))
 
 def peak_rss_mb(model: Path, threads: int = 2) -> float:
     """Peak resident memory (MB) of a fresh process that loads the model and runs it."""
+    # Run outside the current folder: a source checkout there would shadow the package.
     done = subprocess.run(
-        [sys.executable, "-c", _RSS_PROBE, str(model), str(threads)],
+        [sys.executable, "-c", _RSS_PROBE, str(Path(model).resolve()), str(threads)],
         capture_output=True,
         text=True,
         check=True,
         timeout=600,
+        cwd=tempfile.gettempdir(),
     )
     return json.loads(done.stdout.strip().splitlines()[-1]) / 1024.0

@@ -26,6 +26,28 @@ def pixel_grid(size: int) -> torch.Tensor:
     return torch.stack((xs, ys)).unsqueeze(0)
 
 
+class BackwardMap(nn.Module):
+    """Coarse flow + convex-combination mask -> backward map in pixels of the 288 grid.
+
+    A module of its own so that converters can keep it float by type.
+    """
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.upsample = ConvexUpsample()
+        self.register_buffer("grid", pixel_grid(INPUT_SIZE), persistent=False)
+
+    def forward(self, flow: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
+        return self.grid + self.upsample(flow, mask)
+
+
+class Normalise(nn.Module):
+    """Pixels of the 288 grid -> grid_sample coordinates, as the reference script does."""
+
+    def forward(self, backward_map: torch.Tensor) -> torch.Tensor:
+        return pixels_to_normalised(backward_map)
+
+
 class DocTrPP(nn.Module):
     """image (N, 3, 288, 288) RGB in [0, 1] -> backward map (N, 2, 288, 288) in pixels."""
 
@@ -50,8 +72,7 @@ class DocTrPP(nn.Module):
         self.decoder_block2 = AttentionBlock(dim, heads, ffn, depth, grids[0])
         self.query_embed = nn.Embedding(grids[2] * grids[2], dim)
         self.update_block = UpdateBlock(dim)
-        self.upsample = ConvexUpsample()
-        self.register_buffer("grid", pixel_grid(INPUT_SIZE), persistent=False)
+        self.backward_map = BackwardMap()
 
     @staticmethod
     def _tokens(x: torch.Tensor) -> torch.Tensor:
@@ -79,7 +100,7 @@ class DocTrPP(nn.Module):
         d2 = self.decoder_block1.decode(e2, self._up2(d3, g3))
         d1 = self.decoder_block2.decode(e1, self._up2(d2, g2))
         mask, flow = self.update_block(self._image(d1, g1))
-        return self.grid + self.upsample(flow, mask)
+        return self.backward_map(flow, mask)
 
 
 class ExportWrapper(nn.Module):
@@ -88,6 +109,7 @@ class ExportWrapper(nn.Module):
     def __init__(self, model: DocTrPP) -> None:
         super().__init__()
         self.model = model
+        self.normalise = Normalise()
 
     def forward(self, image: torch.Tensor) -> torch.Tensor:
-        return pixels_to_normalised(self.model(image))
+        return self.normalise(self.model(image))

@@ -67,14 +67,17 @@ def _int8_model(wrapper: torch.nn.Module, sample: torch.Tensor, calibration: lis
     from litert_torch.quantize.quant_config import QuantConfig
     from torchao.quantization.pt2e.quantize_pt2e import convert_pt2e, prepare_pt2e
 
-    from .upsample import ConvexUpsample, UpdateBlock
+    from .model import BackwardMap, Normalise
+    from .upsample import UpdateBlock
 
     quantizer = PT2EQuantizer().set_global(
         get_symmetric_quantization_config(is_per_channel=True, is_dynamic=False)
     )
-    # The flow head and the convex upsampling stay float, as in the ONNX int8 presets:
-    # errors there become pixel drift everywhere.
-    quantizer.set_module_type(UpdateBlock, None).set_module_type(ConvexUpsample, None)
+    # The flow head, the convex upsampling and the output normalisation stay float (the
+    # output too): errors there become pixel drift everywhere.
+    # torch.export records module types as qualified names, so the filter takes strings.
+    for module in (UpdateBlock, BackwardMap, Normalise):
+        quantizer.set_module_type(f"{module.__module__}.{module.__qualname__}", None)
     exported = torch.export.export(wrapper, (sample,)).module()
     prepared = prepare_pt2e(exported, quantizer)
     with torch.no_grad():
