@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import cv2
@@ -21,7 +22,7 @@ def run_cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
         capture_output=True,
         text=True,
         timeout=300,
-        cwd=cwd or Path(__file__).resolve().parents[2],
+        cwd=cwd or tempfile.gettempdir(),
     )
 
 

@@ -37,3 +37,21 @@ def test_fp32_tflite_parity_with_pytorch(tiny_model, tiny_tflite, report_differe
 def test_tflite_runs_in_the_rectifier(tiny_tflite, document_photo):
     out = Rectifier(tiny_tflite).rectify(document_photo)
     assert out.shape == document_photo.shape
+
+
+@pytest.mark.parametrize("precision", ["fp16", "int8"])
+def test_reduced_precision_tflite(precision, tiny_model, tmp_path, report_difference):
+    from doctrpp.quantize.calibration import generated_inputs
+
+    calibration = list(generated_inputs(3)) if precision == "int8" else None
+    path = export_tflite(
+        tiny_model, tmp_path / f"m_{precision}.tflite", precision, calibration
+    ).path
+    backend = Rectifier(path).backend
+    assert backend.output["dtype"] == np.float32  # the head and output stay float
+    x = list(generated_inputs(1, seed_offset=9))[0]
+    with torch.no_grad():
+        expected = ExportWrapper(tiny_model)(torch.from_numpy(x)).numpy()
+    worst = float(np.abs(backend.run(x) - expected).max()) * 286.8 / (2 * 0.99)
+    report_difference(f"TFLite {precision} vs PyTorch (tiny, random weights)", worst, 3.0)
+    assert worst < 3.0
