@@ -15,7 +15,7 @@ from doctrpp.benchmarks.metrics import (
     ms_ssim_masked,
 )
 from doctrpp.runtime.backends import open_backend
-from doctrpp.runtime.processing import model_input, photo_map, remap
+from doctrpp.runtime.processing import model_input, rectify_with_map
 
 BENCH_SEED_OFFSET = 3_000_000_000
 
@@ -56,10 +56,6 @@ def photo_probes(folder: Path | None) -> list[Probe]:
     return [Probe(p.stem, "photo", read_image(p)) for p in paths if p.is_file()]
 
 
-def _rectify(image: np.ndarray, backward_map: np.ndarray) -> np.ndarray:
-    return remap(image, photo_map(backward_map, *image.shape[:2]))
-
-
 def _as_uint8_bgr(image: np.ndarray) -> np.ndarray:
     if image.dtype == np.uint16:
         image = (image // 257).astype(np.uint8)
@@ -81,13 +77,13 @@ def accuracy(model: Path, probes: list[Probe], reference_maps: list[np.ndarray] 
             d = map_drift(bm, ref)
             add(probe.kind, "drift_mean_px", d.mean_px)
             add(probe.kind, "drift_max_px", d.max_px)
-            ours, theirs = _rectify(image, bm), _rectify(image, ref)
+            ours, theirs = rectify_with_map(image, bm), rectify_with_map(image, ref)
             add(probe.kind, "ms_ssim_m_vs_ref", ms_ssim_masked(ours, theirs))
             add(probe.kind, "ld_m_vs_ref", local_distortion_masked(ours, theirs))
         if probe.backward_map is not None:
             add(probe.kind, "gt_map_error_px", map_drift(bm, probe.backward_map).mean_px)
-            truth = _rectify(image, probe.backward_map)
-            add(probe.kind, "gt_ms_ssim_m", ms_ssim_masked(_rectify(image, bm), truth))
+            truth = rectify_with_map(image, probe.backward_map)
+            add(probe.kind, "gt_ms_ssim_m", ms_ssim_masked(rectify_with_map(image, bm), truth))
     summary = {}
     for group, metrics in rows.items():
         summary[group] = {

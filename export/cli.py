@@ -92,7 +92,8 @@ def export_checked(model, out_dir: Path, sha256: str, note: str, check: bool = T
     """Export to out_dir/doctrpp_fp32.onnx, print size and timing, and check parity."""
     import numpy as np
 
-    from .onnx_export import export_onnx, onnx_parity_px
+    from .onnx_export import export_onnx
+    from .parity import parity_px
 
     result = export_onnx(
         model, out_dir / "doctrpp_fp32.onnx", checkpoint_sha256=sha256, checkpoint_note=note
@@ -103,7 +104,7 @@ def export_checked(model, out_dir: Path, sha256: str, note: str, check: bool = T
     )
     if check:
         images = np.random.default_rng(0).random((1, 3, 288, 288), dtype=np.float32)
-        worst = onnx_parity_px(model, result.path, images)
+        worst = parity_px(model, result.path, images)
         ok = worst <= PARITY_TOLERANCE_PX
         print(
             f"parity ONNX vs PyTorch: largest difference {worst:.2e} px "
@@ -118,9 +119,7 @@ def export_tflite_checked(model, args, sha256: str, note: str) -> Path:
     """Export .tflite at args.precision and report its difference to PyTorch."""
     import numpy as np
 
-    from doctrpp.benchmarks.accuracy import predict
-
-    from .model import ExportWrapper
+    from .parity import parity_px
     from .tflite_export import export_tflite
 
     calibration = None
@@ -137,20 +136,9 @@ def export_tflite_checked(model, args, sha256: str, note: str) -> Path:
         f"wrote {result.path}: {result.size_bytes / 1e6:.1f} MB, export took {result.seconds:.1f} s"
     )
     if not args.no_check:
-        import torch
+        from doctrpp.quantize.calibration import HELD_OUT_SEED_OFFSET, generated_inputs
 
-        from doctrpp.quantize.calibration import generated_inputs
-
-        inputs = list(generated_inputs(3, seed_offset=2_200_000_000))
-        with torch.no_grad():
-            expected = [
-                ExportWrapper(model)(torch.from_numpy(x)).numpy()[0].transpose(1, 2, 0)
-                for x in inputs
-            ]
-        got = predict(out, inputs)
-        from doctrpp.benchmarks.metrics import map_drift
-
-        worst = max(map_drift(a, b).max_px for a, b in zip(got, expected, strict=True))
+        worst = parity_px(model, out, list(generated_inputs(3, HELD_OUT_SEED_OFFSET)))
         tolerance = PARITY_TOLERANCE_PX if args.precision == "fp32" else float("inf")
         print(
             f"{args.precision} TFLite vs PyTorch: largest difference {worst:.2e} px"

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import os
 from pathlib import Path
 
@@ -18,15 +17,6 @@ def default_checkpoint() -> Path | None:
         return Path(override)
     path = WEIGHTS_DIR / DEFAULT_NAME
     return path if path.is_file() else None
-
-
-def training_record(checkpoint: Path | None = None) -> dict:
-    """The JSON record written beside the default weights (steps, data, validation, sha256)."""
-    checkpoint = checkpoint or default_checkpoint()
-    if checkpoint is None:
-        return {}
-    record = checkpoint.with_suffix(".json")
-    return json.loads(record.read_text()) if record.is_file() else {}
 
 
 def cache_dir() -> Path:

@@ -8,7 +8,6 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
 import torch
 
 from doctrpp import contract
@@ -36,10 +35,9 @@ def _trace_to_onnx(model: DocTrPP) -> bytes:
         # Instance norm without running stats is exactly what we want; silence the notice.
         warnings.filterwarnings("ignore", message=".*instance_norm.*")
         warnings.filterwarnings("ignore", category=torch.jit.TracerWarning)
+        # The legacy exporter is chosen on purpose: silence its deprecation notices.
         warnings.filterwarnings("ignore", category=DeprecationWarning)
-        warnings.filterwarnings(
-            "ignore", category=UserWarning, module="torch.onnx"
-        )  # legacy exporter, chosen
+        warnings.filterwarnings("ignore", category=UserWarning, module="torch.onnx")
         torch.onnx.export(
             wrapper,
             (dummy,),
@@ -118,24 +116,3 @@ def export_onnx(
         size_bytes=len(data),
         node_count=len(onnx_model.graph.node),
     )
-
-
-def onnx_parity_px(
-    model: DocTrPP, onnx_path: str | Path, images: np.ndarray, threads: int = 2
-) -> float:
-    """Largest |ONNX - PyTorch| over `images` (N, 3, 288, 288), in pixels of the 288 grid."""
-    import onnxruntime as ort
-
-    options = ort.SessionOptions()
-    options.intra_op_num_threads = threads
-    session = ort.InferenceSession(str(onnx_path), options, providers=["CPUExecutionProvider"])
-    wrapper = ExportWrapper(model.eval())
-    worst = 0.0
-    for image in images:
-        batch = image[None].astype(np.float32)
-        onnx_out = session.run(None, {contract.INPUT_NAME: batch})[0]
-        with torch.no_grad():
-            torch_out = wrapper(torch.from_numpy(batch)).numpy()
-        diff_px = contract.normalised_to_pixels(onnx_out) - contract.normalised_to_pixels(torch_out)
-        worst = max(worst, float(np.abs(diff_px).max()))
-    return worst

@@ -12,6 +12,7 @@ from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
 from doctrpp.runtime.processing import model_input
 
 CALIBRATION_SEED_OFFSET = 2_000_000_000  # away from training and validation seeds
+HELD_OUT_SEED_OFFSET = 2_100_000_000  # drift checks after quantisation / export
 
 
 def generated_inputs(

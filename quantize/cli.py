@@ -57,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
     from doctrpp.benchmarks.accuracy import drift, predict
     from doctrpp.runtime.backends import ModelError
 
-    from .calibration import generated_inputs, load_calibration
+    from .calibration import HELD_OUT_SEED_OFFSET, generated_inputs, load_calibration
     from .presets import preset_by_name
     from .quantize import quantise
 
@@ -87,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
         f"took {result.seconds:.0f} s"
     )
     if args.check:
-        held_out = list(generated_inputs(args.check, seed_offset=2_100_000_000))
+        held_out = list(generated_inputs(args.check, seed_offset=HELD_OUT_SEED_OFFSET))
         try:
             summary = drift(predict(args.model, held_out), predict(args.out, held_out))
         except ModelError as exc:
@@ -104,10 +104,10 @@ def _sensitivity(args: argparse.Namespace, preset, calibration) -> int:
 
     from doctrpp.files import write_bytes_atomically
 
-    from .calibration import generated_inputs
+    from .calibration import HELD_OUT_SEED_OFFSET, generated_inputs
     from .sensitivity import rank_groups
 
-    held_out = list(generated_inputs(max(args.check, 3), seed_offset=2_100_000_000))
+    held_out = list(generated_inputs(max(args.check, 3), seed_offset=HELD_OUT_SEED_OFFSET))
     ranking = rank_groups(
         args.model,
         preset,

@@ -52,6 +52,11 @@ def photo_map(backward_map: np.ndarray, height: int, width: int) -> np.ndarray:
     return np.stack(channels, axis=2)
 
 
+def rectify_with_map(image: np.ndarray, backward_map: np.ndarray) -> np.ndarray:
+    """The reference post-processing: the model-grid map applied to the full photo."""
+    return remap(image, photo_map(backward_map, image.shape[0], image.shape[1]))
+
+
 def remap(image: np.ndarray, pixel_map: np.ndarray) -> np.ndarray:
     """Sample `image` at `pixel_map` (H, W, 2): bilinear, zeros outside; keeps dtype."""
     return cv2.remap(

@@ -12,7 +12,7 @@ import numpy as np
 from doctrpp import contract
 
 from .backends import ModelError, open_backend
-from .processing import model_input, photo_map, remap
+from .processing import model_input, photo_map, rectify_with_map
 
 
 @dataclass
@@ -63,8 +63,7 @@ class Rectifier:
         timings["inference"] = time.perf_counter() - start
 
         start = time.perf_counter()
-        pixel_map = photo_map(backward_map, image.shape[0], image.shape[1])
-        rectified = remap(image, pixel_map)
+        rectified = rectify_with_map(image, backward_map)
         timings["postprocess"] = time.perf_counter() - start
         return RectificationResult(rectified, np.ascontiguousarray(backward_map), timings)
 

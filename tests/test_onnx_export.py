@@ -13,7 +13,8 @@ from doctrpp import contract
 from doctrpp.export.checkpoint import unwrap_state_dict
 from doctrpp.export.config import REFERENCE, TINY
 from doctrpp.export.model import DocTrPP
-from doctrpp.export.onnx_export import OPSET, export_onnx, onnx_parity_px
+from doctrpp.export.onnx_export import OPSET, export_onnx
+from doctrpp.export.parity import parity_px
 
 PARITY_TOLERANCE_PX = 1e-3
 
@@ -26,7 +27,7 @@ def _max_rank(model: onnx.ModelProto) -> int:
 
 def test_tiny_export_parity_and_graph(tiny_model, tiny_onnx, report_difference):
     images = np.random.default_rng(1).random((2, 3, 288, 288), dtype=np.float32)
-    worst = onnx_parity_px(tiny_model, tiny_onnx, images)
+    worst = parity_px(tiny_model, tiny_onnx, images)
     report_difference("ONNX vs PyTorch (tiny config)", worst, PARITY_TOLERANCE_PX)
     assert worst <= PARITY_TOLERANCE_PX
 

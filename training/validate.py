@@ -9,7 +9,7 @@ import torch
 
 from doctrpp import contract
 from doctrpp.benchmarks.metrics import map_drift, ms_ssim_masked
-from doctrpp.runtime.processing import photo_map, remap
+from doctrpp.runtime.processing import rectify_with_map
 from doctrpp.udir.sample import generate, kind_for_index
 
 from .data import VALIDATION_SEED_OFFSET, to_tensors
@@ -36,16 +36,14 @@ def identity_map(size: int = contract.INPUT_SIZE) -> np.ndarray:
     return np.stack([x, y], -1)
 
 
-def _rectify(image: np.ndarray, backward_map: np.ndarray) -> np.ndarray:
-    return remap(image, photo_map(backward_map, *image.shape[:2]))
-
-
 def score_maps(items: list[ValidationItem], predicted: list[np.ndarray]) -> dict[str, float]:
     """Mean map error (px of the 288 grid) and MS-SSIM-M per kind and overall."""
     per_kind: dict[str, list[tuple[float, float]]] = {}
     for item, bm in zip(items, predicted, strict=True):
         error = map_drift(bm, item.backward_map).mean_px
-        quality = ms_ssim_masked(_rectify(item.image, bm), _rectify(item.image, item.backward_map))
+        quality = ms_ssim_masked(
+            rectify_with_map(item.image, bm), rectify_with_map(item.image, item.backward_map)
+        )
         per_kind.setdefault(item.kind, []).append((error, quality))
     scores: dict[str, float] = {}
     everything = [v for values in per_kind.values() for v in values]

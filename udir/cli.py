@@ -142,7 +142,7 @@ def _label(image: np.ndarray, text: str) -> np.ndarray:
 
 
 def run_sheet(args: argparse.Namespace) -> int:
-    from doctrpp.runtime.processing import photo_map, remap
+    from doctrpp.runtime.processing import rectify_with_map
 
     maps = sorted(args.folder.glob("*_map.npy"))[: args.max]
     if not maps:
@@ -153,7 +153,7 @@ def run_sheet(args: argparse.Namespace) -> int:
         crop = cv2.resize(cv2.imread(stem + ".png"), (288, 288))
         flat = cv2.resize(cv2.imread(stem + "_flat.png"), (288, 288))
         kind = json.loads(Path(stem + ".json").read_text())["kind"]
-        rectified = remap(crop, photo_map(np.load(map_path), 288, 288))
+        rectified = rectify_with_map(crop, np.load(map_path))
         tiles.append(
             np.concatenate(
                 [
