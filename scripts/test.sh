@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Set up ./.venv (if needed, and reinstall the package) and run the test suite.
+# Set up .venv (package + [export,dev,tflite,tflite-export]) and run the whole test suite,
+# TFLite conversion included. The converter stack adds ~1 GB and ~2 minutes of install.
+# usage: scripts/test.sh [PYTEST ARGS]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh export,dev
+bash scripts/setup.sh export,dev,tflite,tflite-export
 .venv/bin/pytest -q "$@"

@@ -12,7 +12,7 @@ from doctrpp.export.checkpoint import load_model
 from doctrpp.export.config import TINY
 from doctrpp.files import save_npy_atomically
 from doctrpp.runtime.imageio import write_image
-from doctrpp.training.data import GeneratedCrops, StreamSampler, hsv_jitter
+from doctrpp.training.data import GeneratedCrops, StreamSampler, hsv_jitter, to_tensors
 from doctrpp.training.loop import TrainSettings, train
 from doctrpp.udir.sample import generate
 
@@ -144,3 +144,13 @@ def test_torchrun_ddp_on_cpu(tmp_path):
     state = torch.load(run / "last.pth", weights_only=True)["train_state"]
     assert state["step"] == 2 and state["samples_seen"] == 4  # 2 steps x 1 x 2 processes
     assert done.stdout.count("stopped at step 2") == 1  # rank 0 reports
+
+
+def test_generated_crops_of_one_kind_for_a_curriculum():
+    """`--kind complete` trains on complete-boundary crops only (what broke session 1's plateau)."""
+    complete = GeneratedCrops(kind="complete", augment=False)
+    mixed = GeneratedCrops(kind="mixed", augment=False)
+    expected = generate(1, "complete")
+    image, target = complete[1]
+    assert torch.equal(target, to_tensors(expected.image, expected.backward_map)[1])
+    assert not torch.equal(target, mixed[1][1])  # mixed index 1 is a partial crop

@@ -33,6 +33,12 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         help="with --resume: keep weights and optimiser, run a new OneCycle of --steps",
     )
     p.add_argument("--data", type=Path, help="train on a folder from `doctrpp crops` instead")
+    p.add_argument(
+        "--kind",
+        default="mixed",
+        choices=["mixed", "complete", "partial", "none"],
+        help="crop kinds to generate (default mixed thirds; e.g. complete first as a curriculum)",
+    )
     p.add_argument("--workers", type=int, default=1, help="data generator processes")
     p.add_argument("--threads", type=int, help="torch threads per process")
     p.add_argument("--no-bf16", action="store_true", help="train in fp32 (no bf16 autocast)")
@@ -75,6 +81,7 @@ def run(args: argparse.Namespace) -> int:
         checkpoint_every=args.checkpoint_every,
         validation_size=args.validation_size,
         data_folder=args.data,
+        kind=args.kind,
         max_minutes=args.max_minutes,
         stop_at=args.stop_at,
         resume=args.resume,

@@ -40,6 +40,7 @@ class TrainSettings:
     checkpoint_every: int = 50
     validation_size: int = 48
     data_folder: Path | None = None
+    kind: str = "mixed"  # generated crops: mixed thirds, or only complete/partial/none
     max_minutes: float | None = None  # stop cleanly (with a checkpoint) after this long
     stop_at: int | None = None  # stop after this step (the schedule still spans `steps`)
     resume: Path | None = None
@@ -141,7 +142,10 @@ def train(s: TrainSettings) -> dict:
             model, device_ids=[env.local_rank] if env.device.type == "cuda" else None
         )
 
-    dataset = FolderCrops(s.data_folder) if s.data_folder else GeneratedCrops(s.seed * 10**9)
+    if s.data_folder:
+        dataset = FolderCrops(s.data_folder)
+    else:
+        dataset = GeneratedCrops(s.seed * 10**9, kind=s.kind)
     per_step = s.batch * env.world
     loader = DataLoader(
         dataset,
