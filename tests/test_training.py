@@ -154,3 +154,38 @@ def test_generated_crops_of_one_kind_for_a_curriculum():
     image, target = complete[1]
     assert torch.equal(target, to_tensors(expected.image, expected.backward_map)[1])
     assert not torch.equal(target, mixed[1][1])  # mixed index 1 is a partial crop
+
+
+def test_publish_writes_fp16_default_with_record(tmp_path):
+    import json
+
+    from doctrpp.export.model import DocTrPP
+    from doctrpp.files import sha256_of
+    from doctrpp.training.publish import publish
+
+    run = tmp_path / "run"
+    run.mkdir()
+    model = DocTrPP(TINY)
+    state = {"step": 5, "samples_seen": 40, "cpu_seconds": 36.0, "wall_seconds": 20.0}
+    ckpt = {"model": model.state_dict(), "config": dataclasses.asdict(TINY), "train_state": state}
+    torch.save(ckpt, run / "best.pth")
+    lines = [
+        {"step": 0, "identity": True, "map_error_px/all": 48.0},
+        {"step": 5, "samples_seen": 40, "map_error_px/all": 30.0},
+    ]
+    (run / "validation.jsonl").write_text("".join(json.dumps(r) + "\n" for r in lines))
+    weights = publish(run / "best.pth", tmp_path / "weights", note="test")
+    record = json.loads(weights.with_suffix(".json").read_text())
+    assert record["sha256"] == sha256_of(weights)
+    assert record["validation"] == {"map_error_px/all": 30.0}
+    assert record["identity"] == {"map_error_px/all": 48.0}
+    assert record["samples_seen"] == 40 and record["cpu_hours"] == 0.01
+    stored = torch.load(weights, weights_only=True)["model"]
+    assert all(v.dtype == torch.float16 for v in stored.values() if v.is_floating_point())
+    loaded = load_model(weights)
+    assert loaded.config == TINY
+    x = torch.rand(1, 3, 288, 288)
+    with torch.no_grad():
+        worst = float((loaded(x) - model.eval()(x)).abs().max())
+    print(f"fp16 storage vs fp32 weights (tiny, random): largest difference {worst:.3g} px")
+    assert worst < 0.5

@@ -1,0 +1,94 @@
+"""Turn a training checkpoint into the embedded default: fp16 weights + config + record.
+
+usage: python -m doctrpp.training.publish RUN_DIR/best.pth [--note TEXT] [--out DIR]
+
+Writes doctrpp_default.pt (state dict in fp16, config, training record) and
+doctrpp_default.json (the same record plus the .pt file's sha256) into export/weights/.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import io
+import json
+import sys
+from pathlib import Path
+
+import torch
+
+from doctrpp.errors import CliError
+from doctrpp.export.default_weights import DEFAULT_NAME, WEIGHTS_DIR
+from doctrpp.files import sha256_of, write_bytes_atomically
+
+
+def validation_at(run_dir: Path, step: int) -> dict:
+    """The run's validation record for `step`, and the identity baseline, from validation.jsonl."""
+    records = [
+        json.loads(line)
+        for line in (run_dir / "validation.jsonl").read_text().split("\n")
+        if line.strip()
+    ]
+    identity = next((r for r in records if r.get("identity")), {})
+    at_step = [r for r in records if r.get("step") == step and not r.get("identity")]
+    if not at_step:
+        raise CliError(f"{run_dir / 'validation.jsonl'} has no validation at step {step}")
+    keep = lambda r: {k: v for k, v in r.items() if "/" in k}  # noqa: E731 - scores only
+    return {"validation": keep(at_step[-1]), "identity": keep(identity)}
+
+
+def training_record(checkpoint: dict, run_dir: Path, note: str) -> dict:
+    state = checkpoint["train_state"]
+    return {
+        "config": checkpoint["config"],
+        "run": run_dir.name,
+        "step": state["step"],
+        "samples_seen": state["samples_seen"],
+        "cpu_hours": round(state["cpu_seconds"] / 3600, 3),
+        "wall_hours": round(state["wall_seconds"] / 3600, 3),
+        "date": datetime.date.today().isoformat(),
+        "note": note,
+        **validation_at(run_dir, state["step"]),
+    }
+
+
+def publish(checkpoint_path: Path, out_dir: Path, note: str) -> Path:
+    checkpoint = torch.load(checkpoint_path, map_location="cpu", weights_only=True)
+    record = training_record(checkpoint, checkpoint_path.parent, note)
+    payload = {
+        "model": {
+            k: v.half() if v.is_floating_point() else v for k, v in checkpoint["model"].items()
+        },
+        "config": checkpoint["config"],
+        "training_record": record,
+    }
+    buffer = io.BytesIO()
+    torch.save(payload, buffer)
+    weights = out_dir / DEFAULT_NAME
+    write_bytes_atomically(weights, buffer.getvalue())
+    record = {**record, "sha256": sha256_of(weights), "file": DEFAULT_NAME}
+    text = json.dumps(record, indent=2, sort_keys=True) + "\n"
+    write_bytes_atomically(weights.with_suffix(".json"), text.encode())
+    return weights
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m doctrpp.training.publish", description=__doc__)
+    parser.add_argument("checkpoint", type=Path, help="a checkpoint of `doctrpp train`")
+    parser.add_argument("--note", default="", help="free text for the record (e.g. the recipe)")
+    parser.add_argument("--out", type=Path, default=WEIGHTS_DIR, help="folder (export/weights)")
+    args = parser.parse_args(argv)
+    try:
+        if not args.checkpoint.is_file():
+            raise CliError(f"{args.checkpoint}: no such file")
+        weights = publish(args.checkpoint, args.out, args.note)
+    except CliError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    size = weights.stat().st_size / 1e6
+    print(f"wrote {weights} ({size:.1f} MB) and {weights.with_suffix('.json').name}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
