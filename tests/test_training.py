@@ -189,3 +189,9 @@ def test_publish_writes_fp16_default_with_record(tmp_path):
         worst = float((loaded(x) - model.eval()(x)).abs().max())
     print(f"fp16 storage vs fp32 weights (tiny, random): largest difference {worst:.3g} px")
     assert worst < 0.5
+
+
+def test_complete_first_curriculum_switches_to_mixed():
+    data = GeneratedCrops(kind="mixed", complete_until=6)
+    kinds = [data.kind_of(i) for i in range(4, 10)]
+    assert kinds == ["complete", "complete", "complete", "partial", "none", "complete"]

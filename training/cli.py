@@ -37,7 +37,15 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "--kind",
         default="mixed",
         choices=["mixed", "complete", "partial", "none"],
-        help="crop kinds to generate (default mixed thirds; e.g. complete first as a curriculum)",
+        help="crop kinds to generate (default: mixed thirds)",
+    )
+    p.add_argument(
+        "--complete-first",
+        type=int,
+        default=0,
+        metavar="STEPS",
+        help="curriculum: train this many steps on complete-boundary crops, then on --kind "
+        "(CPU runs here needed it to leave the mean-map plateau)",
     )
     p.add_argument("--workers", type=int, default=1, help="data generator processes")
     p.add_argument("--threads", type=int, help="torch threads per process")
@@ -62,6 +70,12 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(str(exc)) from None
     if args.resume and not args.resume.is_file():
         raise CliError(f"--resume {args.resume}: no such file")
+    if args.complete_first < 0:
+        raise CliError("--complete-first must be >= 0")
+    if args.data and (args.kind != "mixed" or args.complete_first):
+        raise CliError(
+            "--kind and --complete-first choose generated crops; they do not apply to --data"
+        )
     if args.data and not args.data.is_dir():
         raise CliError(f"--data {args.data}: no such folder")
     if args.out.exists() and not args.out.is_dir():
@@ -82,6 +96,7 @@ def run(args: argparse.Namespace) -> int:
         validation_size=args.validation_size,
         data_folder=args.data,
         kind=args.kind,
+        complete_first=args.complete_first,
         max_minutes=args.max_minutes,
         stop_at=args.stop_at,
         resume=args.resume,

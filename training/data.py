@@ -41,19 +41,30 @@ def to_tensors(
 
 
 class GeneratedCrops(Dataset):
-    """Sample i is `generate(seed_offset + i, kind_for_index(i, kind))`, with colour jitter."""
+    """Sample i is `generate(seed_offset + i, self.kind_of(i))`, with colour jitter."""
 
     def __init__(
-        self, seed_offset: int = 0, kind: str = "mixed", augment: bool = True, length: int = 10**12
+        self,
+        seed_offset: int = 0,
+        kind: str = "mixed",
+        augment: bool = True,
+        length: int = 10**12,
+        complete_until: int = 0,
     ) -> None:
         self.seed_offset, self.kind, self.augment, self.length = seed_offset, kind, augment, length
+        # A curriculum: samples before this index are complete-boundary crops. Trained on the
+        # mixed stream from the start, our CPU runs collapsed to the mean map (session 1).
+        self.complete_until = complete_until
+
+    def kind_of(self, index: int) -> str:
+        return "complete" if index < self.complete_until else kind_for_index(index, self.kind)
 
     def __len__(self) -> int:
         return self.length
 
     def __getitem__(self, index: int) -> tuple[torch.Tensor, torch.Tensor]:
         seed = self.seed_offset + index
-        sample = generate(seed, kind_for_index(index, self.kind))
+        sample = generate(seed, self.kind_of(index))
         image = sample.image
         if self.augment:
             image = hsv_jitter(image, np.random.default_rng([seed, 7]))

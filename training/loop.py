@@ -41,6 +41,7 @@ class TrainSettings:
     validation_size: int = 48
     data_folder: Path | None = None
     kind: str = "mixed"  # generated crops: mixed thirds, or only complete/partial/none
+    complete_first: int = 0  # curriculum: this many steps of complete crops before `kind`
     max_minutes: float | None = None  # stop cleanly (with a checkpoint) after this long
     stop_at: int | None = None  # stop after this step (the schedule still spans `steps`)
     resume: Path | None = None
@@ -145,7 +146,8 @@ def train(s: TrainSettings) -> dict:
     if s.data_folder:
         dataset = FolderCrops(s.data_folder)
     else:
-        dataset = GeneratedCrops(s.seed * 10**9, kind=s.kind)
+        complete_until = s.complete_first * s.batch * env.world  # sample index
+        dataset = GeneratedCrops(s.seed * 10**9, kind=s.kind, complete_until=complete_until)
     per_step = s.batch * env.world
     loader = DataLoader(
         dataset,
