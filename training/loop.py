@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import io
 import json
@@ -21,6 +20,7 @@ from doctrpp.export.model import DocTrPP
 from doctrpp.files import write_bytes_atomically
 
 from .data import FolderCrops, GeneratedCrops, StreamSampler
+from .runlog import RunLog
 from .validate import identity_scores, predict_maps, score_maps, validation_set
 
 
@@ -77,27 +77,6 @@ def save_checkpoint(path: Path, payload: dict) -> None:
     buffer = io.BytesIO()
     torch.save(payload, buffer)
     write_bytes_atomically(path, buffer.getvalue())
-
-
-class RunLog:
-    """log.csv (every step) and validation.jsonl (every validation), appended."""
-
-    def __init__(self, out: Path) -> None:
-        self.csv_path = out / "log.csv"
-        self.val_path = out / "validation.jsonl"
-        fresh = not self.csv_path.exists()
-        self.csv_file = open(self.csv_path, "a", newline="")  # noqa: SIM115 - kept open for the run
-        self.writer = csv.writer(self.csv_file)
-        if fresh:
-            self.writer.writerow(["step", "loss_px", "lr", "samples_per_s", "wall_s"])
-
-    def step(self, step: int, loss: float, lr: float, rate: float, wall: float) -> None:
-        self.writer.writerow([step, f"{loss:.4f}", f"{lr:.3e}", f"{rate:.3f}", f"{wall:.1f}"])
-        self.csv_file.flush()
-
-    def validation(self, record: dict) -> None:
-        with open(self.val_path, "a") as f:
-            f.write(json.dumps(record) + "\n")
 
 
 def _schedule(optimiser, s: TrainSettings):

@@ -21,20 +21,17 @@ from doctrpp.errors import CliError
 from doctrpp.export.default_weights import DEFAULT_NAME, WEIGHTS_DIR
 from doctrpp.files import sha256_of, write_bytes_atomically
 
+from .runlog import read_validation
+
 
 def validation_at(run_dir: Path, step: int) -> dict:
-    """The run's validation record for `step`, and the identity baseline, from validation.jsonl."""
-    records = [
-        json.loads(line)
-        for line in (run_dir / "validation.jsonl").read_text().split("\n")
-        if line.strip()
-    ]
-    identity = next((r for r in records if r.get("identity")), {})
-    at_step = [r for r in records if r.get("step") == step and not r.get("identity")]
+    """The run's validation scores at `step` and the identity baseline's."""
+    identity, records = read_validation(run_dir)
+    at_step = [r for r in records if r["step"] == step]
     if not at_step:
         raise CliError(f"{run_dir / 'validation.jsonl'} has no validation at step {step}")
-    keep = lambda r: {k: v for k, v in r.items() if "/" in k}  # noqa: E731 - scores only
-    return {"validation": keep(at_step[-1]), "identity": keep(identity)}
+    scores = lambda r: {k: v for k, v in r.items() if "/" in k}  # noqa: E731
+    return {"validation": scores(at_step[-1]), "identity": scores(identity)}
 
 
 def training_record(checkpoint: dict, run_dir: Path, note: str) -> dict:
