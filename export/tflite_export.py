@@ -58,7 +58,21 @@ def add_metadata(tflite: bytes, metadata: dict[str, str]) -> bytes:
     return bytes(builder.Output())
 
 
-def _int8_model(wrapper: torch.nn.Module, sample: torch.Tensor, calibration: list[np.ndarray]):
+def default_keep_float() -> tuple[type, ...]:
+    """Module types int8 export leaves in float: the flow head, the convex upsampling and
+    the output normalisation (the output too): errors there become pixel drift everywhere."""
+    from .model import BackwardMap, Normalise
+    from .upsample import UpdateBlock
+
+    return (UpdateBlock, BackwardMap, Normalise)
+
+
+def _int8_model(
+    wrapper: torch.nn.Module,
+    sample: torch.Tensor,
+    calibration: list[np.ndarray],
+    keep_float: tuple[type, ...],
+):
     """PT2E static int8, per-channel weights, calibrated on `calibration` inputs."""
     from litert_torch.quantize.pt2e_quantizer import (
         PT2EQuantizer,
@@ -67,16 +81,11 @@ def _int8_model(wrapper: torch.nn.Module, sample: torch.Tensor, calibration: lis
     from litert_torch.quantize.quant_config import QuantConfig
     from torchao.quantization.pt2e.quantize_pt2e import convert_pt2e, prepare_pt2e
 
-    from .model import BackwardMap, Normalise
-    from .upsample import UpdateBlock
-
     quantizer = PT2EQuantizer().set_global(
         get_symmetric_quantization_config(is_per_channel=True, is_dynamic=False)
     )
-    # The flow head, the convex upsampling and the output normalisation stay float (the
-    # output too): errors there become pixel drift everywhere.
     # torch.export records module types as qualified names, so the filter takes strings.
-    for module in (UpdateBlock, BackwardMap, Normalise):
+    for module in keep_float:
         quantizer.set_module_type(f"{module.__module__}.{module.__qualname__}", None)
     exported = torch.export.export(wrapper, (sample,)).module()
     prepared = prepare_pt2e(exported, quantizer)
@@ -93,7 +102,10 @@ def export_tflite(
     calibration: list[np.ndarray] | None = None,
     checkpoint_sha256: str = "",
     checkpoint_note: str = "",
+    keep_float: tuple[type, ...] | None = None,
 ) -> TfliteResult:
+    """Convert `model` to a .tflite file; int8 keeps `keep_float` module types in float
+    (default: `default_keep_float()`)."""
     import litert_torch
 
     if precision not in PRECISIONS:
@@ -104,7 +116,8 @@ def export_tflite(
     if precision == "int8":
         if not calibration:
             raise ValueError("int8 export needs calibration inputs")
-        quantised, quant_config = _int8_model(wrapper, sample, calibration)
+        keep = default_keep_float() if keep_float is None else keep_float
+        quantised, quant_config = _int8_model(wrapper, sample, calibration, keep)
         edge = litert_torch.convert(quantised, (sample,), quant_config=quant_config)
     elif precision == "fp16":
         from litert_torch.generative.quantize import quant_recipes

@@ -31,7 +31,12 @@ def plot_runs(run_dirs: list[Path], out: Path) -> None:
         identity, records = read_validation(run_dir)
         samples = [r["samples_seen"] for r in records]
         for ax, kind in zip(axes, KINDS, strict=True):
-            ax.plot(samples, [r[f"map_error_px/{kind}"] for r in records], label=run_dir.name)
+            ax.plot(
+                samples,
+                [r[f"map_error_px/{kind}"] for r in records],
+                marker=".",
+                label=run_dir.name,
+            )
     for ax, kind in zip(axes, KINDS, strict=True):
         if f"map_error_px/{kind}" in identity:
             ax.axhline(identity[f"map_error_px/{kind}"], color="grey", ls="--", label="identity")
