@@ -36,3 +36,19 @@ def test_default_beats_identity_on_every_crop_kind():
         identity = record["identity"][f"map_error_px/{kind}"]
         print(f"{kind}: {ours:.1f} px vs identity {identity:.1f} px")
         assert ours < identity
+
+
+def test_record_reproduces_on_the_validation_set(report_difference):
+    """Re-score the shipped weights (fp32 compute, fp16 storage) on the trainer's fixed
+    validation set: the record must still describe them (and the generator)."""
+    from doctrpp.training.validate import predict_maps, score_maps, validation_set
+
+    record = _record()
+    items = validation_set(48)
+    scores = score_maps(items, predict_maps(load_model(WEIGHTS), items))
+    worst = max(
+        abs(scores[f"map_error_px/{kind}"] - record["validation"][f"map_error_px/{kind}"])
+        for kind in ("complete", "partial", "none", "all")
+    )
+    report_difference("default weights: validation vs record (per-kind mean px)", worst, 0.5)
+    assert worst <= 0.5
