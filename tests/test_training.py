@@ -195,3 +195,35 @@ def test_complete_first_curriculum_switches_to_mixed():
     data = GeneratedCrops(kind="mixed", complete_until=6)
     kinds = [data.kind_of(i) for i in range(4, 10)]
     assert kinds == ["complete", "complete", "complete", "partial", "none", "complete"]
+
+
+def test_sigterm_to_the_process_group_checkpoints_cleanly(tmp_path):
+    """Ctrl-C or `kill -- -PGID` reaches the data workers too: they must leave stopping
+    to the trainer, which writes last.pth and exits 0."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    run = tmp_path / "run"
+    args = ["--out", str(run), "--config", "tiny", "--steps", "100000", "--batch", "1"]
+    args += ["--workers", "1", "--threads", "1", "--validation-size", "3"]
+    process = subprocess.Popen(
+        [sys.executable, "-m", "doctrpp", "train", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=tmp_path,
+        start_new_session=True,  # its own process group, like a shell job
+    )
+    deadline = time.time() + 300
+    while time.time() < deadline and not (run / "log.csv").is_file():
+        time.sleep(0.5)
+    time.sleep(3)  # a few steps, workers running
+    os.killpg(process.pid, signal.SIGTERM)
+    out, err = process.communicate(timeout=300)
+    assert process.returncode == 0, err[-2000:]
+    assert "stopped at step" in out
+    state = torch.load(run / "last.pth", weights_only=True)["train_state"]
+    assert state["step"] >= 1

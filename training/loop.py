@@ -79,6 +79,14 @@ def save_checkpoint(path: Path, payload: dict) -> None:
     write_bytes_atomically(path, buffer.getvalue())
 
 
+def _leave_stopping_to_the_trainer(_worker_id: int) -> None:
+    """Data workers ignore SIGTERM/SIGINT: a signal sent to the whole process group (Ctrl-C,
+    `kill -- -PGID`, a job scheduler) must reach only the trainer, which checkpoints and
+    then shuts the workers down, instead of killing a worker and crashing the trainer."""
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def _schedule(optimiser, s: TrainSettings):
     return torch.optim.lr_scheduler.OneCycleLR(
         # +1: the scheduler counts its construction as a step; s.steps updates follow.
@@ -133,6 +141,7 @@ def train(s: TrainSettings) -> dict:
         batch_size=s.batch,
         sampler=StreamSampler(state["samples_seen"], env.rank, env.world),
         num_workers=s.workers,
+        worker_init_fn=_leave_stopping_to_the_trainer if s.workers else None,
         persistent_workers=s.workers > 0,
         prefetch_factor=2 if s.workers else None,
     )
@@ -144,7 +153,10 @@ def train(s: TrainSettings) -> dict:
         print("identity baseline:", json.dumps({k: round(v, 3) for k, v in baseline.items()}))
 
     stop = {"now": False}
-    signal.signal(signal.SIGTERM, lambda *_: stop.update(now=True))
+    previous_handlers = {  # SIGTERM/Ctrl-C: finish the step, checkpoint, exit
+        sig: signal.signal(sig, lambda *_: stop.update(now=True))
+        for sig in (signal.SIGTERM, signal.SIGINT)
+    }
     autocast_dtype = torch.bfloat16 if s.bf16 else None
     started, cpu_started = time.time(), time.process_time()
     wall_before, cpu_before = state["wall_seconds"], state["cpu_seconds"]
@@ -226,5 +238,7 @@ def train(s: TrainSettings) -> dict:
         save_checkpoint(s.out / "last.pth", payload())
         if state["step"] % s.validate_every:
             run_validation()
+    for sig, handler in previous_handlers.items():
+        signal.signal(sig, handler)
     env.close()
     return dict(state)
