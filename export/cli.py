@@ -7,6 +7,8 @@ from pathlib import Path
 
 from doctrpp.errors import CliError, require
 
+from .tflite_export import DEFAULT_KEEP_FLOAT, KEEP_FLOAT_CHOICES, PRECISIONS
+
 PARITY_TOLERANCE_PX = 1e-3
 
 
@@ -37,14 +39,14 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p.add_argument("--format", choices=["onnx", "tflite"], default="onnx")
     p.add_argument(
         "--precision",
-        choices=["fp32", "fp16", "int8"],
+        choices=PRECISIONS,
         default="fp32",
         help="tflite only (ONNX int8: `doctrpp quantize`)",
     )
     p.add_argument(
         "--keep-float",
-        choices=["head+backbone", "head"],
-        default="head+backbone",
+        choices=KEEP_FLOAT_CHOICES,
+        default=DEFAULT_KEEP_FLOAT,
         help="TFLite int8: modules left in float (default head+backbone: half the drift "
         "of head alone on the trained default, same speed)",
     )

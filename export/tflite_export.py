@@ -12,16 +12,22 @@ import json
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import torch
 
 from doctrpp import contract
 from doctrpp.files import write_bytes_atomically
 
 from .metadata import model_metadata
-from .model import DocTrPP, ExportWrapper
 
+if TYPE_CHECKING:
+    import torch
+
+    from .model import DocTrPP
+
+# torch is imported inside the functions: `doctrpp --help` reads the option lists below
+# and must stay torch-free (the runtime CLI never imports torch).
 METADATA_NAME = "doctrpp"
 PRECISIONS = ("fp32", "fp16", "int8")
 
@@ -64,9 +70,10 @@ def add_metadata(tflite: bytes, metadata: dict[str, str]) -> bytes:
 # default it halved the drift (mean 0.73 -> 0.38 px, max 5.5 -> 2.0 px on 18 held-out
 # crops) at the same latency. Session 1's reference-size numbers used "head".
 KEEP_FLOAT_CHOICES = ("head+backbone", "head")
+DEFAULT_KEEP_FLOAT = "head+backbone"
 
 
-def keep_float_types(choice: str = "head+backbone") -> tuple[type, ...]:
+def keep_float_types(choice: str) -> tuple[type, ...]:
     from .backbone import FeatureEncoder
     from .model import BackwardMap, Normalise
     from .upsample import UpdateBlock
@@ -84,6 +91,7 @@ def _int8_model(
     keep_float: tuple[type, ...],
 ):
     """PT2E static int8, per-channel weights, calibrated on `calibration` inputs."""
+    import torch
     from litert_torch.quantize.pt2e_quantizer import (
         PT2EQuantizer,
         get_symmetric_quantization_config,
@@ -112,10 +120,13 @@ def export_tflite(
     calibration: list[np.ndarray] | None = None,
     checkpoint_sha256: str = "",
     checkpoint_note: str = "",
-    keep_float: str = "head+backbone",
+    keep_float: str = DEFAULT_KEEP_FLOAT,
 ) -> TfliteResult:
     """Convert `model` to a .tflite file; int8 keeps the `keep_float` modules in float."""
     import litert_torch
+    import torch
+
+    from .model import ExportWrapper
 
     if precision not in PRECISIONS:
         raise ValueError(f"precision must be one of {', '.join(PRECISIONS)}")

@@ -155,7 +155,8 @@ def quantise(
             onnx.save(prepared_model, str(prepared))
         chosen = eligible_nodes(prepared_model, preset)
         if only_nodes is not None:  # a subset, e.g. for the sensitivity ranking
-            chosen = [name for name in chosen if name in set(only_nodes)]
+            subset = set(only_nodes)
+            chosen = [name for name in chosen if name in subset]
         quantised_path = Path(folder) / "int8.onnx"
         if preset.mode == "dynamic":
             quantize_dynamic(

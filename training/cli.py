@@ -7,6 +7,7 @@ import os
 from pathlib import Path
 
 from doctrpp.errors import CliError, require
+from doctrpp.udir.scene import KINDS
 
 
 def add_parser(commands: argparse._SubParsersAction) -> None:
@@ -36,7 +37,7 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--kind",
         default="mixed",
-        choices=["mixed", "complete", "partial", "none"],
+        choices=["mixed", *KINDS],
         help="crop kinds to generate (default: mixed thirds)",
     )
     p.add_argument(
