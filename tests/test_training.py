@@ -227,3 +227,63 @@ def test_sigterm_to_the_process_group_checkpoints_cleanly(tmp_path):
     assert "stopped at step" in out
     state = torch.load(run / "last.pth", weights_only=True)["train_state"]
     assert state["step"] >= 1
+
+
+def test_init_continues_from_weights_only_file(tmp_path):
+    """--init: weights from a weights-only file, step/stream/hours carried on, a new cycle."""
+    from doctrpp.training.loop import carried_state
+
+    settings = TrainSettings(
+        out=tmp_path / "a",
+        config=TINY,
+        steps=4,
+        batch=2,
+        workers=0,
+        threads=2,
+        validate_every=4,
+        checkpoint_every=2,
+        validation_size=3,
+        kind="complete",
+    )
+    train(settings)
+    snapshot = tmp_path / "a" / "snapshots" / "step0000004.pt"
+    assert snapshot.is_file()
+    weights = torch.load(snapshot, weights_only=True)
+    assert set(weights) == {"model", "config", "train_state"}
+    carried = carried_state(weights)
+    assert carried["step"] == 4 and carried["samples_seen"] == 8
+    state = train(dataclasses.replace(settings, out=tmp_path / "b", init=snapshot, steps=2))
+    assert state["step"] == 6 and state["samples_seen"] == 12
+    assert state["cpu_seconds"] > carried["cpu_seconds"]
+    # the embedded default's record works as a starting point too
+    record = {"training_record": {"step": 7, "samples_seen": 56, "cpu_hours": 1.0}}
+    assert carried_state(record)["cpu_seconds"] == 3600.0
+
+
+def test_real_photo_check_is_logged_with_validation(tmp_path):
+    """--real-photos: reference-free scores per kind at each validation, identity first."""
+    import json
+
+    photos = tmp_path / "photos"
+    for i in range(2):
+        write_image(photos / f"p{i}.jpg", generate(i, "complete", size=400).image)
+    settings = TrainSettings(
+        out=tmp_path / "run",
+        config=TINY,
+        steps=2,
+        batch=2,
+        workers=0,
+        threads=2,
+        validate_every=2,
+        validation_size=3,
+        real_photos=photos,
+        real_photos_count=2,
+    )
+    train(settings)
+    records = [
+        json.loads(x) for x in (tmp_path / "run" / "validation.jsonl").read_text().splitlines()
+    ]
+    assert records[0]["identity"] and records[0]["real/black_share/none"] == 0.0
+    for kind in ("complete", "partial", "none"):
+        assert 0 <= records[-1][f"real/black_share/{kind}"] <= 1
+        assert f"real/straightness_ratio/{kind}" in records[-1]

@@ -33,6 +33,13 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         action="store_true",
         help="with --resume: keep weights and optimiser, run a new OneCycle of --steps",
     )
+    p.add_argument(
+        "--init",
+        type=Path,
+        help="start from these weights only (the embedded default .pt, a committed checkpoint "
+        "or a run's .pth) with a fresh optimiser and lr cycle; step, hours and the generated "
+        "stream continue from its record",
+    )
     p.add_argument("--data", type=Path, help="train on a folder from `doctrpp crops` instead")
     p.add_argument(
         "--kind",
@@ -55,7 +62,20 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p.add_argument("--checkpoint-every", type=int, default=50)
     p.add_argument("--validation-size", type=int, default=48, help="fixed validation crops")
     p.add_argument("--max-minutes", type=float, help="stop cleanly after this long")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=0, help="seed of the weights and generated data")
+    p.add_argument(
+        "--real-photos",
+        type=Path,
+        metavar="FOLDER",
+        help="real photos for a reference-free check at each validation (never trained on): "
+        "text-line straightness, black and kept share per crop kind",
+    )
+    p.add_argument(
+        "--page-reuse",
+        type=int,
+        default=4,
+        help="generated crops share a page this many at a time (cheaper data)",
+    )
     p.set_defaults(handler=run)
 
 
@@ -71,12 +91,20 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(str(exc)) from None
     if args.resume and not args.resume.is_file():
         raise CliError(f"--resume {args.resume}: no such file")
+    if args.init and args.resume:
+        raise CliError("--init and --resume exclude each other (--resume keeps the optimiser)")
+    if args.init and not args.init.is_file():
+        raise CliError(f"--init {args.init}: no such file")
     if args.complete_first < 0:
         raise CliError("--complete-first must be >= 0")
     if args.data and (args.kind != "mixed" or args.complete_first):
         raise CliError(
             "--kind and --complete-first choose generated crops; they do not apply to --data"
         )
+    if args.real_photos and not args.real_photos.is_dir():
+        raise CliError(f"--real-photos {args.real_photos}: no such folder")
+    if args.page_reuse < 1:
+        raise CliError("--page-reuse must be >= 1")
     if args.data and not args.data.is_dir():
         raise CliError(f"--data {args.data}: no such folder")
     if args.out.exists() and not args.out.is_dir():
@@ -102,6 +130,9 @@ def run(args: argparse.Namespace) -> int:
         stop_at=args.stop_at,
         resume=args.resume,
         restart_schedule=args.restart_schedule,
+        init=args.init,
+        real_photos=args.real_photos,
+        page_reuse=args.page_reuse,
         seed=args.seed,
     )
     state = train(settings)

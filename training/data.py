@@ -50,11 +50,13 @@ class GeneratedCrops(Dataset):
         augment: bool = True,
         length: int = 10**12,
         complete_until: int = 0,
+        page_reuse: int = 1,
     ) -> None:
         self.seed_offset, self.kind, self.augment, self.length = seed_offset, kind, augment, length
         # A curriculum: samples before this index are complete-boundary crops. Trained on the
         # mixed stream from the start, our CPU runs collapsed to the mean map (session 1).
         self.complete_until = complete_until
+        self.page_reuse = page_reuse  # consecutive samples share a page (see udir make_scene)
 
     def kind_of(self, index: int) -> str:
         return "complete" if index < self.complete_until else kind_for_index(index, self.kind)
@@ -64,7 +66,7 @@ class GeneratedCrops(Dataset):
 
     def __getitem__(self, index: int) -> tuple[torch.Tensor, torch.Tensor]:
         seed = self.seed_offset + index
-        sample = generate(seed, self.kind_of(index))
+        sample = generate(seed, self.kind_of(index), page_reuse=self.page_reuse)
         image = sample.image
         if self.augment:
             image = hsv_jitter(image, np.random.default_rng([seed, 7]))

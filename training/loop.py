@@ -20,8 +20,10 @@ from doctrpp.export.model import DocTrPP
 from doctrpp.files import write_bytes_atomically
 
 from .data import FolderCrops, GeneratedCrops, StreamSampler
+from .realcheck import predict as predict_real
+from .realcheck import real_photo_set, score_real
 from .runlog import RunLog
-from .validate import identity_scores, predict_maps, score_maps, validation_set
+from .validate import identity_map, identity_scores, predict_maps, score_maps, validation_set
 
 
 @dataclass(frozen=True)
@@ -46,7 +48,12 @@ class TrainSettings:
     stop_at: int | None = None  # stop after this step (the schedule still spans `steps`)
     resume: Path | None = None
     restart_schedule: bool = False  # on resume: keep weights/optimiser, start a new lr cycle
+    init: Path | None = None  # weights-only start (default .pt or committed checkpoint), new cycle
     seed: int = 0
+    page_reuse: int = 4  # generated crops share a page this many at a time
+    real_photos: Path | None = None  # real photos for the reference-free check at validation
+    real_photos_count: int = 16  # photos used (each as a complete, partial and none crop)
+    snapshots: bool = True  # keep a weights-only snapshot at each validation (to choose from)
 
 
 class Distributed:
@@ -87,6 +94,22 @@ def _leave_stopping_to_the_trainer(_worker_id: int) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+def carried_state(weights: dict) -> dict:
+    """Step, stream position and hours carried by a weights-only file, so totals accumulate
+    and the generated stream continues where that training stopped (no repeated samples)."""
+    if "train_state" in weights:
+        source = weights["train_state"]
+        keys = ("step", "samples_seen", "wall_seconds", "cpu_seconds")
+        return {k: source[k] for k in keys if k in source}
+    record = weights.get("training_record", {})
+    return {
+        "step": int(record.get("step", 0)),
+        "samples_seen": int(record.get("samples_seen", 0)),
+        "wall_seconds": 3600.0 * record.get("wall_hours", 0.0),
+        "cpu_seconds": 3600.0 * record.get("cpu_hours", 0.0),
+    }
+
+
 def _schedule(optimiser, s: TrainSettings):
     return torch.optim.lr_scheduler.OneCycleLR(
         # +1: the scheduler counts its construction as a step; s.steps updates follow.
@@ -124,6 +147,11 @@ def train(s: TrainSettings) -> dict:
             schedule = _schedule(optimiser, s)
         else:
             schedule.load_state_dict(ckpt["scheduler"])
+    elif s.init:
+        weights = torch.load(s.init, map_location=env.device, weights_only=True)
+        model.load_state_dict({k: v.float() for k, v in weights["model"].items()})
+        state.update(carried_state(weights))
+        state["schedule_start"] = state["step"]  # a fresh optimiser and lr cycle from here
     net = model
     if env.world > 1:
         net = torch.nn.parallel.DistributedDataParallel(
@@ -134,7 +162,9 @@ def train(s: TrainSettings) -> dict:
         dataset = FolderCrops(s.data_folder)
     else:
         complete_until = s.complete_first * s.batch * env.world  # sample index
-        dataset = GeneratedCrops(s.seed * 10**9, kind=s.kind, complete_until=complete_until)
+        dataset = GeneratedCrops(
+            s.seed * 10**9, kind=s.kind, complete_until=complete_until, page_reuse=s.page_reuse
+        )
     per_step = s.batch * env.world
     loader = DataLoader(
         dataset,
@@ -146,9 +176,14 @@ def train(s: TrainSettings) -> dict:
         prefetch_factor=2 if s.workers else None,
     )
     validation = validation_set(s.validation_size) if env.main else []
+    real_items = []
+    if env.main and s.real_photos:
+        real_items = real_photo_set(s.real_photos, s.real_photos_count)
     log = RunLog(s.out) if env.main else None
-    if env.main and state["step"] == 0:
+    if env.main and not (s.out / "validation.jsonl").exists():
         baseline = identity_scores(validation)
+        if real_items:
+            baseline.update(score_real(real_items, [identity_map()] * len(real_items)))
         log.validation({"step": 0, "identity": True, **baseline})
         print("identity baseline:", json.dumps({k: round(v, 3) for k, v in baseline.items()}))
 
@@ -172,9 +207,20 @@ def train(s: TrainSettings) -> dict:
             "train_state": dict(state),
         }
 
+    def weights_only() -> dict:
+        """What `--init` and publishing need: weights, config and the training state."""
+        full = payload()
+        return {
+            "model": full["model"],
+            "config": full["config"],
+            "train_state": full["train_state"],
+        }
+
     def run_validation() -> None:
         maps = predict_maps(model, validation, autocast_dtype=autocast_dtype)
         scores = score_maps(validation, maps)
+        if real_items:
+            scores.update(score_real(real_items, predict_real(model, real_items)))
         record = {
             "step": state["step"],
             "samples_seen": state["samples_seen"],
@@ -187,6 +233,8 @@ def train(s: TrainSettings) -> dict:
             json.dumps({k: round(v, 3) for k, v in scores.items()}),
             flush=True,
         )
+        if s.snapshots:
+            save_checkpoint(s.out / "snapshots" / f"step{state['step']:07d}.pt", weights_only())
         if scores["map_error_px/all"] < state["best_map_error_px"]:
             state["best_map_error_px"] = scores["map_error_px/all"]
             save_checkpoint(s.out / "best.pth", payload())

@@ -12,8 +12,12 @@ def _smooth_noise(rng: np.random.Generator, h: int, w: int, cells: int) -> np.nd
 
 
 def _colour(rng: np.random.Generator, dark: bool = False) -> np.ndarray:
+    """Mostly muted colours, as on desks and floors (saturated ones are rarer)."""
     top = 150 if dark else 255
-    return rng.uniform(20, top, 3).astype(np.float32)
+    colour = rng.uniform(20, top, 3)
+    grey = colour.mean()
+    muted = rng.uniform(0.2, 0.7) if rng.random() < 0.8 else 1.0
+    return (grey + (colour - grey) * muted).astype(np.float32)
 
 
 def wood(rng, h, w):
@@ -96,12 +100,61 @@ def add_clutter(rng: np.random.Generator, image: np.ndarray) -> None:
             )
 
 
-STYLES = {"wood": wood, "solid": solid, "fabric": fabric, "gradient": gradient}
+def wood_grain(rng, h, w):
+    """Fine, noise-warped grain along one direction (desks, floors)."""
+    base = np.array([rng.uniform(30, 110), rng.uniform(60, 150), rng.uniform(100, 200)], np.float32)
+    along = rng.random() < 0.5
+    n = w if along else h
+    lines = cv2.GaussianBlur(rng.standard_normal((1, n)).astype(np.float32), (0, 0), 1.5)[0]
+    lines = lines / (np.abs(lines).max() + 1e-6)
+    warp = _smooth_noise(rng, h, w, 5) * rng.uniform(5, 30)
+    index = (np.arange(w)[None, :] if along else np.arange(h)[:, None]) + warp
+    grain = lines[np.clip(index.astype(int), 0, n - 1)]
+    return (
+        base
+        * (0.85 + 0.15 * grain[..., None])
+        * (0.8 + 0.4 * _smooth_noise(rng, h, w, 3)[..., None])
+    )
+
+
+def carpet(rng, h, w):
+    colour = _colour(rng)
+    pile = rng.standard_normal((h, w, 3)).astype(np.float32) * rng.uniform(10, 35)
+    return colour * (0.8 + 0.3 * _smooth_noise(rng, h, w, 6)[..., None]) + pile
+
+
+def keyboard(rng, h, w):
+    """Rows of keys (a laptop beside the page)."""
+    dark = rng.random() < 0.6
+    body = np.float32(rng.uniform(20, 60) if dark else rng.uniform(170, 220))
+    image = np.full((h, w, 3), body, np.float32)
+    key = max(4, int(min(h, w) * rng.uniform(0.06, 0.14)))
+    gap = max(1, key // 6)
+    key_colour = float(body + (25 if dark else -30))
+    for row, y in enumerate(range(gap, h, key + gap)):
+        shift = (row * key // 3) % (key + gap)
+        for x in range(gap - shift, w, key + gap):
+            cv2.rectangle(image, (x, y), (x + key, y + key), (key_colour,) * 3, -1)
+    angle = rng.uniform(-30, 30)
+    rotation = cv2.getRotationMatrix2D((w / 2, h / 2), angle, 1.0)
+    return cv2.warpAffine(image, rotation, (w, h), borderMode=cv2.BORDER_REFLECT)
+
+
+STYLES = {
+    "wood": wood,
+    "wood_grain": wood_grain,
+    "solid": solid,
+    "fabric": fabric,
+    "carpet": carpet,
+    "keyboard": keyboard,
+    "gradient": gradient,
+}
+STYLE_WEIGHTS = (0.08, 0.22, 0.25, 0.13, 0.14, 0.08, 0.1)
 
 
 def render_background(rng: np.random.Generator, h: int, w: int) -> np.ndarray:
     """A (h, w, 3) float32 BGR background in [0, 255]."""
-    style = str(rng.choice(list(STYLES), p=[0.3, 0.35, 0.2, 0.15]))
+    style = str(rng.choice(list(STYLES), p=STYLE_WEIGHTS))
     image = np.ascontiguousarray(STYLES[style](rng, h, w), dtype=np.float32)
     if rng.random() < 0.6:
         add_clutter(rng, image)

@@ -7,6 +7,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from . import ranges
+
 
 @dataclass(frozen=True)
 class Look:
@@ -20,6 +22,10 @@ class Look:
     motion: tuple[float, ...]  # () or (length at 288 px, angle)
     noise_sigma: float
     jpeg_quality: int  # 0 = no JPEG
+    hand_shadow: tuple[float, ...] = ()  # () or (x, y, rx, ry, angle, strength) of the crop
+    fingers: tuple[float, ...] = ()  # () or (edge position 0-4, count, length, width, b, g, r)
+    vignette: float = 0.0
+    edge_defocus: float = 0.0  # blur sigma at the crop corners (at 288 px)
 
 
 def random_look(rng: np.random.Generator) -> Look:
@@ -34,7 +40,31 @@ def random_look(rng: np.random.Generator) -> Look:
     motion: tuple[float, ...] = ()
     if rng.random() < 0.12:
         motion = (rng.uniform(2, 7), rng.uniform(0, 180))
+    hand_shadow: tuple[float, ...] = ()
+    if rng.random() < ranges.HAND_SHADOW_SHARE:
+        hand_shadow = (
+            *rng.uniform(-0.1, 1.1, 2),
+            *rng.uniform(0.15, 0.5, 2),
+            rng.uniform(0, 180),
+            rng.uniform(0.45, 0.8),
+        )
+    fingers: tuple[float, ...] = ()
+    if rng.random() < ranges.FINGERS_SHARE:
+        skin = rng.uniform([110, 140, 180], [180, 195, 240])
+        fingers = (
+            rng.uniform(0, 4),
+            rng.integers(1, 5),
+            rng.uniform(0.08, 0.2),
+            rng.uniform(0.03, 0.05),
+            *skin,
+        )
     return Look(
+        hand_shadow=tuple(float(c) for c in hand_shadow),
+        fingers=tuple(float(c) for c in fingers),
+        vignette=float(rng.uniform(*ranges.VIGNETTE)),
+        edge_defocus=float(
+            rng.uniform(0.8, 2.5) if rng.random() < ranges.EDGE_DEFOCUS_SHARE else 0.0
+        ),
         light=tuple(float(c) for c in light),
         ambient=float(rng.uniform(0.45, 0.85)),
         gradient=(
@@ -44,7 +74,7 @@ def random_look(rng: np.random.Generator) -> Look:
         ),
         shadow=tuple(float(c) for c in shadow),
         highlight=tuple(float(c) for c in highlight),
-        colour_cast=tuple(float(c) for c in rng.uniform(0.88, 1.1, 3)),
+        colour_cast=tuple(float(c) for c in rng.uniform(*ranges.WHITE_BALANCE, 3)),
         blur_sigma=float(rng.uniform(0.3, 1.4) if rng.random() < 0.45 else 0.0),
         motion=tuple(float(c) for c in motion),
         noise_sigma=float(rng.uniform(0.5, 7.0)),
@@ -76,6 +106,10 @@ def apply_lighting(look: Look, image: np.ndarray) -> np.ndarray:
         side /= np.hypot(x1 - x0, y1 - y0) + 1e-6
         inside = 0.5 * (1 + np.tanh(side / (2 * max(softness, 1e-3))))  # sigmoid, no overflow
         factor = factor * (1 - (1 - strength) * inside)
+    if look.hand_shadow:
+        factor = factor * _hand_shadow(look.hand_shadow, h, w)
+    if look.vignette:
+        factor = factor * (1 - look.vignette * ((xx - 0.5) ** 2 + (yy - 0.5) ** 2) * 2)
     out = image * factor[..., None]
     if look.highlight:
         x, y, radius, strength = look.highlight
@@ -84,11 +118,57 @@ def apply_lighting(look: Look, image: np.ndarray) -> np.ndarray:
     return out * np.asarray(look.colour_cast, np.float32)
 
 
+def _hand_shadow(params: tuple[float, ...], h: int, w: int) -> np.ndarray:
+    """A soft elliptic shadow with finger-like lobes (of a hand or a phone), as a factor."""
+    x, y, rx, ry, angle, strength = params
+    small = np.zeros((64, 64), np.float32)
+    centre = (int(x * 64), int(y * 64))
+    cv2.ellipse(small, centre, (int(rx * 64) + 1, int(ry * 64) + 1), angle, 0, 360, 1.0, -1)
+    direction = np.deg2rad(angle)
+    for k in range(4):  # fingers off one end
+        offset = (k - 1.5) * ry * 64 * 0.45
+        base = np.array(centre) + rx * 64 * np.array([np.cos(direction), np.sin(direction)])
+        base = base + offset * np.array([-np.sin(direction), np.cos(direction)])
+        tip = base + rx * 64 * 0.9 * np.array([np.cos(direction), np.sin(direction)])
+        cv2.line(
+            small,
+            tuple(int(c) for c in base),
+            tuple(int(c) for c in tip),
+            1.0,
+            max(1, int(ry * 64 * 0.3)),
+        )
+    small = cv2.GaussianBlur(small, (0, 0), 3.0)
+    return 1 - (1 - strength) * cv2.resize(small, (w, h), interpolation=cv2.INTER_LINEAR)
+
+
+def draw_fingers(image: np.ndarray, look: Look, base: np.ndarray, inward: np.ndarray) -> None:
+    """Fingers over the page edge at `base` (pixels), pointing along `inward`; in place."""
+    _, count, length, width, *skin = look.fingers
+    h, w = image.shape[:2]
+    size = max(h, w)
+    inward = inward / (np.linalg.norm(inward) + 1e-9)
+    across = np.array([-inward[1], inward[0]])
+    for k in range(int(count)):
+        start = base + across * (k - (count - 1) / 2) * width * size * 1.05 - inward * length * size
+        tip = start + inward * length * size * (1.3 + 0.25 * np.sin(k * 1.7))
+        thickness = max(2, int(width * size))
+        colour = [float(c) * (0.9 + 0.05 * k % 2) for c in skin]
+        p0, p1 = tuple(int(c) for c in start), tuple(int(c) for c in tip)
+        cv2.line(image, p0, p1, [c * 0.7 for c in colour], thickness + 2, cv2.LINE_AA)
+        cv2.line(image, p0, p1, colour, thickness, cv2.LINE_AA)
+
+
 def apply_camera(look: Look, image: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """Blur, noise and JPEG; float32 BGR in [0, 255] in, uint8 out."""
     scale = max(image.shape[:2]) / 288.0
     if look.blur_sigma > 0:
         image = cv2.GaussianBlur(image, (0, 0), look.blur_sigma * scale)
+    if look.edge_defocus > 0:  # shallow depth of field: sharp centre, soft corners
+        h, w = image.shape[:2]
+        yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+        weight = np.clip(((xx / w - 0.5) ** 2 + (yy / h - 0.5) ** 2) * 2, 0, 1)[..., None]
+        soft = cv2.GaussianBlur(image, (0, 0), look.edge_defocus * scale)
+        image = image * (1 - weight) + soft * weight
     if look.motion:
         length, angle = look.motion
         size = max(3, int(length * scale) | 1)

@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
+from . import ranges
+from .documents import render_page
 from .effects import random_look
-from .page import render_page
 from .scene import KINDS, Scene
 from .surface import invert, project, random_surface
 
@@ -41,12 +43,12 @@ def choose_crop(rng: np.random.Generator, surface, kind: str) -> tuple[float, fl
     (bx0, by0), (bx1, by1) = outline.min(0), outline.max(0)
     bw, bh = bx1 - bx0, by1 - by0
     if kind == "complete":
-        m = rng.uniform(0.02, 0.22, 4)
+        m = rng.uniform(*ranges.COMPLETE_MARGIN, 4)
         return (bx0 - m[0] * bw, by0 - m[1] * bh, bx1 + m[2] * bw, by1 + m[3] * bh)
     for _ in range(40):
         if kind == "none":
             cu, cv = rng.uniform(0.25, 0.75, 2)
-            size = rng.uniform(0.3, 0.7) * min(bw, bh)
+            size = rng.uniform(*ranges.NONE_CROP_SIZE) * min(bw, bh)
             aspect = rng.uniform(0.7, 1.4)
             centre = np.array(project(surface, np.array(cu), np.array(cv))).ravel()
             box = _box_around(rng, centre, size * aspect, size / aspect)
@@ -62,19 +64,36 @@ def choose_crop(rng: np.random.Generator, surface, kind: str) -> tuple[float, fl
                 edge
             ]
             centre = np.array(project(surface, np.array(cu), np.array(cv))).ravel()
-            box = _box_around(rng, centre, rng.uniform(0.4, 0.9) * bw, rng.uniform(0.4, 0.9) * bh)
-            if 0.3 <= _page_fraction(surface, box) <= 0.9:
+            low, high = ranges.PARTIAL_CROP_SIZE
+            box = _box_around(rng, centre, rng.uniform(low, high) * bw, rng.uniform(low, high) * bh)
+            if (
+                ranges.PARTIAL_PAGE_SHARE[0]
+                <= _page_fraction(surface, box)
+                <= ranges.PARTIAL_PAGE_SHARE[1]
+            ):
                 return box
     raise CropError(f"no {kind} crop found")
 
 
-def make_scene(seed: int, kind: str, long_side: int = 768) -> Scene:
-    """A scene drawn deterministically from `seed`, with a crop of `kind`."""
+@lru_cache(maxsize=4)
+def page_for(page_seed: int, long_side: int = ranges.PAGE_LONG_SIDE) -> np.ndarray:
+    """The flat page of `page_seed` (cached: training reuses a page for a few scenes)."""
+    page = render_page(np.random.default_rng([page_seed, 0x9A6E]), long_side)
+    page.setflags(write=False)
+    return page
+
+
+def make_scene(seed: int, kind: str, page_reuse: int = 1) -> Scene:
+    """A scene drawn deterministically from `seed`, with a crop of `kind`.
+
+    `page_reuse` > 1: seeds that agree in `seed // page_reuse` share the page (not the
+    deformation, crop, background or look), which makes training data cheaper to generate.
+    """
     if kind not in KINDS:
         raise ValueError(f"unknown crop kind {kind!r}; choose from {', '.join(KINDS)}")
     rng = np.random.default_rng([seed, KINDS.index(kind)])
+    page = page_for(seed // max(page_reuse, 1))
     for _ in range(20):
-        page = render_page(rng, long_side)
         surface = random_surface(rng, width=page.shape[1] / page.shape[0])
         try:
             crop = choose_crop(rng, surface, kind)
@@ -99,11 +118,49 @@ def make_scene(seed: int, kind: str, long_side: int = 768) -> Scene:
 
 
 def visible_uv_box(scene: Scene, grid: int = 129) -> tuple[float, float, float, float]:
-    """Bounding box in (u, v) of the page content visible in the crop."""
+    """The flat target of a partial/none crop: a page rectangle (u0, v0, u1, v1) that lies
+    in the crop but for at most `OUTSIDE_SHARE_MAX` of its area.
+
+    Starts from the bounding box of the visible page content and moves in, one grid row or
+    column at a time, the side whose edge lies most outside the crop. (The bounding box
+    itself would make the model shrink crops without page edges into a patch ringed by
+    black: the corners of the box lie outside the photo.)
+    """
     u, v = scene.crop_uv(grid, grid, grid=grid)
     visible = (u >= 0) & (u <= 1) & (v >= 0) & (v <= 1)
     u, v = np.clip(u[visible], 0, 1), np.clip(v[visible], 0, 1)
-    return (float(u.min()), float(v.min()), float(u.max()), float(v.max()))
+    box = (float(u.min()), float(v.min()), float(u.max()), float(v.max()))
+    return inscribed_uv_box(scene, box)
+
+
+OUTSIDE_SHARE_MAX = 0.01  # of the flat target allowed to map outside the crop (black)
+
+
+def inscribed_uv_box(
+    scene: Scene, box: tuple[float, float, float, float], grid: int = 97
+) -> tuple[float, float, float, float]:
+    u0, v0, u1, v1 = box
+    us, vs = np.linspace(u0, u1, grid), np.linspace(v0, v1, grid)
+    uu, vv = np.meshgrid(us, vs)
+    x, y = project(scene.surface, uu, vv)
+    cx0, cy0, cx1, cy1 = scene.crop
+    outside = ~((x >= cx0) & (x <= cx1) & (y >= cy0) & (y <= cy1))
+    top, bottom, left, right = 0, grid - 1, 0, grid - 1
+    while bottom - top > grid // 4 and right - left > grid // 4:
+        window = outside[top : bottom + 1, left : right + 1]
+        if window.mean() <= OUTSIDE_SHARE_MAX:
+            break
+        edges = [window[0].mean(), window[-1].mean(), window[:, 0].mean(), window[:, -1].mean()]
+        side = int(np.argmax(edges))
+        if side == 0:
+            top += 1
+        elif side == 1:
+            bottom -= 1
+        elif side == 2:
+            left += 1
+        else:
+            right -= 1
+    return (float(us[left]), float(vs[top]), float(us[right]), float(vs[bottom]))
 
 
 @dataclass
@@ -122,9 +179,14 @@ def kind_for_index(index: int, kind: str = "mixed") -> str:
 
 
 def generate(
-    seed: int, kind: str, size: int = 288, map_size: int = 288, photometric: bool = True
+    seed: int,
+    kind: str,
+    size: int = 288,
+    map_size: int = 288,
+    photometric: bool = True,
+    page_reuse: int = 1,
 ) -> Sample:
-    scene = make_scene(seed, kind)
+    scene = make_scene(seed, kind, page_reuse)
     return Sample(
         image=scene.render(size, size, photometric=photometric),
         flat=scene.flat_target(size, size),

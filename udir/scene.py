@@ -13,11 +13,11 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from .effects import Look, apply_camera, apply_lighting, shading
+from .effects import Look, apply_camera, apply_lighting, draw_fingers, shading
 from .surface import SurfaceParams, invert, project, surface_normals_z
 
 KINDS = ("complete", "partial", "none")
-INVERSION_GRID = 97  # image -> page inversion on a coarse grid, then bilinear upsampling
+INVERSION_GRID = 145  # image -> page inversion on a coarse grid, then bilinear upsampling
 
 
 def _grid(box: tuple[float, float, float, float], h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
@@ -72,6 +72,18 @@ class Scene:
         gx = 2 * (x - x0) / (x1 - x0) - 1
         gy = 2 * (y - y0) / (y1 - y0) - 1
         return np.stack([gx, gy], -1).astype(np.float32)
+
+    def _edge_point(self, position: float, h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
+        """A point of the page edge (position 0-4 runs round it) in crop pixels, and the
+        direction from it towards the page centre."""
+        side, t = int(position) % 4, position % 1
+        u, v = [(t, 0.0), (1.0, t), (1 - t, 1.0), (0.0, 1 - t)][side]
+        x, y = project(self.surface, np.array([u, 0.5]), np.array([v, 0.5]))
+        x0, y0, x1, y1 = self.crop
+        px = (x - x0) / (x1 - x0) * (w - 1)
+        py = (y - y0) / (y1 - y0) * (h - 1)
+        point = np.array([px[0], py[0]])
+        return point, np.array([px[1], py[1]]) - point
 
     # -- pictures -----------------------------------------------------------------
     def _texture(self, pixels_per_page: float) -> np.ndarray:
@@ -137,5 +149,8 @@ class Scene:
             image = page
         if not photometric:
             return np.clip(image + 0.5, 0, 255).astype(np.uint8)
+        if self.look.fingers and self.kind != "none":
+            image = np.ascontiguousarray(image, dtype=np.float32)
+            draw_fingers(image, self.look, *self._edge_point(self.look.fingers[0], h, w))
         image = apply_lighting(self.look, image)
         return apply_camera(self.look, image, np.random.default_rng(self.noise_seed))

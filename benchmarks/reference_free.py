@@ -1,0 +1,60 @@
+"""Reference-free scores of a rectification (real photos have no flat scan to compare with).
+
+- `black_share`: share of the output sampled from outside the photo (black in the result).
+- `line_straightness`: how straight and level text lines are, from projection profiles:
+  in narrow vertical bands, straight horizontal lines of text give a row profile of ink
+  with sharp peaks and empty gaps (high contrast); tilted or curved lines smear it.
+  Compared with the untouched photo's, the ratio says whether rectification helped.
+  It cannot see content that was cut away, page edges, or distortions along lines
+  (horizontal stretching); it is only meaningful on pages with text lines.
+- `kept_share`: share of the photo that the output samples (a rectification of a crop
+  without page edges should keep nearly all of it).
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+SCORE_SIZE = 576  # images are scored at this square size
+BANDS = 8  # vertical bands for projection profiles
+SMOOTHING = np.array([0.25, 0.5, 0.25])  # of the row profile (JPEG noise, antialiasing)
+
+
+def black_share(backward_map: np.ndarray) -> float:
+    """Share of output pixels whose (normalised, align_corners) source lies outside."""
+    outside = (np.abs(backward_map[..., 0]) > 1) | (np.abs(backward_map[..., 1]) > 1)
+    return float(outside.mean())
+
+
+def kept_share(backward_map: np.ndarray, grid: int = 96) -> float:
+    """Share of the photo (on a grid x grid raster) that some output pixel samples."""
+    points = (backward_map.reshape(-1, 2) + 1) / 2 * (grid - 1)
+    inside = np.all((points >= 0) & (points <= grid - 1), axis=1)
+    cells = np.zeros((grid, grid), np.uint8)
+    xy = np.round(points[inside]).astype(int)
+    cells[xy[:, 1], xy[:, 0]] = 1
+    cells = cv2.morphologyEx(cells, cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8))
+    return float(cells.mean())
+
+
+def ink_mask(gray: np.ndarray) -> np.ndarray:
+    """Dark text strokes (float 0/1): darker than the local background by a margin."""
+    background = cv2.medianBlur(gray, 31)
+    return ((background.astype(np.int16) - gray) > 25).astype(np.float32)
+
+
+def line_straightness(image: np.ndarray) -> float:
+    """Mean over vertical bands of the row-profile contrast of ink (0 = no lines)."""
+    gray = image if image.ndim == 2 else cv2.cvtColor(image[:, :, :3], cv2.COLOR_BGR2GRAY)
+    gray = cv2.resize(gray, (SCORE_SIZE, SCORE_SIZE), interpolation=cv2.INTER_AREA)
+    ink = ink_mask(gray)
+    width = SCORE_SIZE // BANDS
+    scores = []
+    for b in range(BANDS):
+        profile = ink[:, b * width : (b + 1) * width].mean(axis=1)
+        if profile.mean() < 0.01:  # no text in this band
+            continue
+        profile = np.convolve(profile, SMOOTHING, mode="same")
+        scores.append(float(profile.std() / (profile.mean() + 1e-6)))
+    return float(np.mean(scores)) if scores else 0.0

@@ -1,0 +1,37 @@
+"""Reference-free scores for real photos: black share, kept share, text-line straightness."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from doctrpp.benchmarks.reference_free import black_share, kept_share, line_straightness
+from doctrpp.training.validate import identity_map
+
+
+def _lines_page(angle: float = 0.0) -> np.ndarray:
+    page = np.full((576, 576), 235, np.uint8)
+    for y in range(40, 540, 18):
+        for x in range(30, 540, 40):
+            cv2.line(page, (x, y), (x + 30, y), 30, 4)
+    rotation = cv2.getRotationMatrix2D((288, 288), angle, 1.0)
+    return cv2.warpAffine(page, rotation, (576, 576), borderValue=235)
+
+
+def test_straight_lines_score_higher_than_tilted_ones():
+    level, tilted = line_straightness(_lines_page(0)), line_straightness(_lines_page(8))
+    print(f"straightness level {level:.2f}, tilted 8 degrees {tilted:.2f}")
+    assert level > 1.5 * tilted
+    assert line_straightness(np.full((100, 100), 200, np.uint8)) == 0.0  # no text: no score
+
+
+def test_identity_keeps_everything_and_adds_no_black():
+    assert black_share(identity_map()) == 0.0
+    assert kept_share(identity_map()) > 0.99
+
+
+def test_a_zoomed_out_map_adds_black_and_a_zoomed_in_one_drops_content():
+    out, inside = identity_map() * 1.25, identity_map() * 0.5
+    assert 0.3 < black_share(out) < 0.4  # 1 - 0.8 ** 2
+    assert black_share(inside) == 0.0
+    assert 0.2 < kept_share(inside) < 0.3

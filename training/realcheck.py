@@ -1,0 +1,92 @@
+"""The real-photo check in the training loop: reference-free scores on real phone photos.
+
+Photos (never trained on) and crops of the three kinds cut from them
+(`udir.photos.photo_crop_box`), rectified by the model being trained and scored with
+`benchmarks.reference_free`: text-line straightness against the untouched crop's, black
+share and kept share, per kind.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+import torch
+
+from doctrpp import contract
+from doctrpp.benchmarks.reference_free import (
+    SCORE_SIZE,
+    black_share,
+    kept_share,
+    line_straightness,
+)
+from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
+from doctrpp.runtime.processing import model_input, rectify_with_map
+from doctrpp.udir.photos import photo_crop_box
+from doctrpp.udir.scene import KINDS
+
+
+@dataclass
+class RealItem:
+    name: str
+    kind: str
+    image: np.ndarray  # BGR uint8 crop at SCORE_SIZE x SCORE_SIZE (squashed like the input)
+    straightness: float  # of the untouched crop
+
+
+def real_photo_set(folder: Path, photos: int = 32, seed: int = 0) -> list[RealItem]:
+    """`photos` photos spread over the folder, each as a complete, partial and none crop."""
+    files = sorted(f for f in Path(folder).iterdir() if f.suffix.lower() in IMAGE_SUFFIXES)
+    if not files:
+        raise FileNotFoundError(f"{folder}: no images")
+    picked = [files[i] for i in np.linspace(0, len(files) - 1, min(photos, len(files))).astype(int)]
+    items = []
+    for index, path in enumerate(picked):
+        photo = read_image(path)[:, :, :3]
+        for kind in KINDS:
+            rng = np.random.default_rng([seed, index, KINDS.index(kind)])
+            x0, y0, x1, y1 = photo_crop_box(rng, photo.shape[0], photo.shape[1], kind)
+            crop = cv2.resize(photo[y0:y1, x0:x1], (SCORE_SIZE, SCORE_SIZE), cv2.INTER_AREA)
+            items.append(RealItem(path.stem, kind, crop, line_straightness(crop)))
+    return items
+
+
+@torch.no_grad()
+def predict(model: torch.nn.Module, items: list[RealItem], batch: int = 8) -> list[np.ndarray]:
+    was_training = model.training
+    model.eval()
+    device = next(model.parameters()).device
+    maps = []
+    for start in range(0, len(items), batch):
+        chunk = items[start : start + batch]
+        inputs = np.concatenate([model_input(it.image, contract.INPUT_SIZE) for it in chunk])
+        pixels = model(torch.from_numpy(inputs).to(device)).float().cpu().numpy()
+        maps.extend(contract.pixels_to_normalised(p).transpose(1, 2, 0) for p in pixels)
+    model.train(was_training)
+    return maps
+
+
+def score_real(items: list[RealItem], maps: list[np.ndarray]) -> dict[str, float]:
+    """Per kind: straightness of the result / of the untouched crops, black and kept share."""
+    rows: dict[str, list[tuple[float, float, float, float]]] = {}
+    for item, backward_map in zip(items, maps, strict=True):
+        rectified = rectify_with_map(item.image, backward_map)
+        rows.setdefault(item.kind, []).append(
+            (
+                line_straightness(rectified),
+                item.straightness,
+                black_share(backward_map),
+                kept_share(backward_map),
+            )
+        )
+    scores: dict[str, float] = {}
+    for kind, values in rows.items():
+        v = np.array(values)
+        scores[f"real/straightness_ratio/{kind}"] = float(
+            v[:, 0].mean() / max(v[:, 1].mean(), 1e-6)
+        )
+        scores[f"real/black_share/{kind}"] = float(v[:, 2].mean())
+        scores[f"real/kept_share/{kind}"] = float(v[:, 3].mean())
+    return scores

@@ -1,0 +1,60 @@
+"""Every random range of the crop generator, in one place (fractions unless said).
+
+Changing a value here changes the training distribution: keep the ground truth exact
+(tests/test_udir.py) and look at a contact sheet (`doctrpp crops` + `doctrpp sheet`).
+"""
+
+# -- pages (page.py) ---------------------------------------------------------------------
+DOCUMENT_TYPES = {  # relative weights
+    "article": 0.34,  # book and article pages, 1-3 columns, dense
+    "magazine": 0.16,  # photos, colour boxes, big headings
+    "letter": 0.12,
+    "invoice": 0.12,
+    "receipt": 0.08,
+    "form": 0.10,
+    "slide": 0.08,
+}
+PAGE_ASPECT = {  # long side / short side
+    "article": (1.25, 1.5),
+    "magazine": (1.25, 1.45),
+    "letter": (1.29, 1.42),
+    "invoice": (1.29, 1.42),
+    "receipt": (2.0, 3.6),
+    "form": (1.29, 1.42),
+    "slide": (1.33, 1.78),
+}
+LINE_PITCH = {  # text line pitch / page long side
+    "article": (1 / 80, 1 / 38),
+    "magazine": (1 / 80, 1 / 40),
+    "letter": (1 / 60, 1 / 36),
+    "invoice": (1 / 70, 1 / 38),
+    "receipt": (1 / 70, 1 / 40),
+    "form": (1 / 60, 1 / 34),
+    "slide": (1 / 28, 1 / 16),
+}
+FONT_FAMILIES = {"times": 0.3, "serif": 0.2, "sans": 0.38, "mono": 0.12}  # typeset.FAMILIES
+LANDSCAPE_SHARE = 0.12  # of pages other than slides and receipts
+MARGIN = (0.04, 0.12)  # page margin / page side
+PAGE_LONG_SIDE = 1024  # px of the flat page texture
+
+# -- paper and print (paper.py) -------------------------------------------------------------
+PAPER_WHITE_SHARE = 0.72  # the rest: cream/recycled (half) or light colours
+PAPER_WHITE = (226, 252)  # grey level of white paper
+PAPER_FIBRE_SIGMA = (0.8, 4.0)  # grey levels of fibre texture
+SHOW_THROUGH = (0.0, 0.12)  # contrast of the other side's print (mirrored, blurred)
+SHOW_THROUGH_SHARE = 0.4
+INK_BLEED_SIGMA = (0.0, 0.7)  # px at PAGE_LONG_SIDE
+PRINT_NOISE = (0.0, 0.25)  # relative ink density noise
+
+# -- framing (sample.py) ---------------------------------------------------------------------
+COMPLETE_MARGIN = (0.0, 0.14)  # background around a complete page / page bounding box side
+NONE_CROP_SIZE = (0.3, 0.7)  # side / shorter page-bounding-box side
+PARTIAL_CROP_SIZE = (0.4, 0.9)  # side / page bounding box side
+PARTIAL_PAGE_SHARE = (0.3, 0.9)  # of the crop covered by the page
+
+# -- capture (effects.py) --------------------------------------------------------------------
+HAND_SHADOW_SHARE = 0.25  # a soft shadow of a hand or phone
+FINGERS_SHARE = 0.15  # fingers holding the page edge (complete and partial crops)
+VIGNETTE = (0.0, 0.35)  # darkening at the corners
+EDGE_DEFOCUS_SHARE = 0.3  # blur growing towards the crop edges
+WHITE_BALANCE = (0.9, 1.08)  # per-channel gain
