@@ -17,11 +17,24 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "threads), FPS, peak RSS, drift and MS-SSIM-M/LD-M against the reference (fp32) "
         "model, and accuracy against ground truth on generated crops of each kind.",
     )
-    p.add_argument("--models", type=Path, nargs="+", required=True, metavar="MODEL")
+    p.add_argument(
+        "--models",
+        type=Path,
+        nargs="+",
+        required=True,
+        metavar="MODEL",
+        help=".onnx and/or .tflite files to compare",
+    )
     p.add_argument("--out", type=Path, required=True, help="report folder (created)")
     p.add_argument("--reference", type=Path, help="model to compare against (default: first fp32)")
     p.add_argument("--runs", type=int, default=20, help="timed runs per model and thread count")
-    p.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+    p.add_argument(
+        "--threads",
+        type=int,
+        nargs="+",
+        default=[1, 2],
+        help="inference thread counts to time each model at (default 1 2)",
+    )
     p.add_argument("--per-kind", type=int, default=10, help="generated crops per kind")
     p.add_argument("--photos", type=Path, help="folder of real photos (default: scikit-image's)")
     p.add_argument("--note", help="a line for the report (e.g. which weights these are)")

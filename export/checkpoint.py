@@ -72,6 +72,11 @@ def read_checkpoint(path: str | Path) -> tuple[dict[str, torch.Tensor], ModelCon
     path = Path(path)
     if not path.is_file():
         raise CheckpointError(f"checkpoint not found: {path}")
+    if not looks_like_torch_file(path):
+        raise CheckpointError(
+            f"{path} is not a PyTorch checkpoint (expected a file written by torch.save: "
+            ".pth/.pt, a zip archive or a legacy pickle)"
+        )
     try:
         obj = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as exc:  # torch raises several types for corrupt or pickled files
@@ -81,6 +86,13 @@ def read_checkpoint(path: str | Path) -> tuple[dict[str, torch.Tensor], ModelCon
     if isinstance(obj, Mapping) and isinstance(obj.get("config"), Mapping):
         config = ModelConfig.from_dict(dict(obj["config"]))
     return unwrap_state_dict(obj), config
+
+
+def looks_like_torch_file(path: Path) -> bool:
+    """torch.save writes a zip archive (PK) or, in the legacy format, a pickle (0x80)."""
+    with open(path, "rb") as f:
+        head = f.read(2)
+    return head == b"PK" or head[:1] == b"\x80"
 
 
 def load_model(path: str | Path, config: ModelConfig | None = None) -> DocTrPP:

@@ -17,8 +17,3 @@ def default_checkpoint() -> Path | None:
         return Path(override)
     path = WEIGHTS_DIR / DEFAULT_NAME
     return path if path.is_file() else None
-
-
-def cache_dir() -> Path:
-    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base) / "doctrpp-edge"

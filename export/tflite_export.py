@@ -121,8 +121,29 @@ def export_tflite(
     checkpoint_sha256: str = "",
     checkpoint_note: str = "",
     keep_float: str = DEFAULT_KEEP_FLOAT,
+    verbose: bool = False,
 ) -> TfliteResult:
-    """Convert `model` to a .tflite file; int8 keeps the `keep_float` modules in float."""
+    """Convert `model` to a .tflite file; int8 keeps the `keep_float` modules in float.
+
+    The converter's own output (dozens of lines) is shown only with `verbose`.
+    """
+    from doctrpp.quiet import quiet
+
+    with quiet(not verbose):
+        return _export_tflite(
+            model,
+            out_path,
+            precision,
+            calibration,
+            checkpoint_sha256,
+            checkpoint_note,
+            keep_float,
+        )
+
+
+def _export_tflite(
+    model, out_path, precision, calibration, checkpoint_sha256, checkpoint_note, keep_float
+) -> TfliteResult:
     import litert_torch
     import torch
 

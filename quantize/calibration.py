@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import sys
+import time
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 import numpy as np
 
 from doctrpp import contract
+from doctrpp.progress import progress
 from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
 from doctrpp.runtime.processing import model_input
 
@@ -38,22 +41,47 @@ def folder_inputs(folder: str | Path) -> list[np.ndarray]:
 class CalibrationReader:
     """onnxruntime's CalibrationDataReader protocol over model inputs."""
 
-    def __init__(self, inputs: Iterable[np.ndarray], input_name: str = contract.INPUT_NAME):
+    def __init__(
+        self,
+        inputs: Iterable[np.ndarray],
+        input_name: str = contract.INPUT_NAME,
+        show_progress: bool = True,
+    ):
         self.inputs = list(inputs)
         self.input_name = input_name
+        self.show_progress = show_progress
         self._position = 0
+        self._started = 0.0
 
     def get_next(self) -> dict[str, np.ndarray] | None:
+        if self.show_progress and self._position:  # the previous input has been run
+            self._report(self._position)
         if self._position >= len(self.inputs):
             return None
+        if not self._position:
+            self._started = time.perf_counter()
         batch = self.inputs[self._position]
         self._position += 1
         return {self.input_name: batch}
+
+    def _report(self, done: int) -> None:
+        total = len(self.inputs)
+        if done % max(1, total // 20) and done != total:
+            return
+        rate = done / max(time.perf_counter() - self._started, 1e-9)
+        print(
+            f"calibrating: {done}/{total} inputs, {rate:.1f}/s, eta {(total - done) / rate:.0f} s",
+            file=sys.stderr,
+            flush=True,
+        )
 
     def rewind(self) -> None:
         self._position = 0
 
 
 def load_calibration(folder: str | Path | None, synthetic: int) -> list[np.ndarray]:
-    """The user's images when `folder` is given, else `synthetic` generated crops."""
-    return folder_inputs(folder) if folder else list(generated_inputs(synthetic))
+    """The user's images when `folder` is given, else `synthetic` generated crops (with a
+    progress bar on stderr: generating them takes a while)."""
+    if folder:
+        return folder_inputs(folder)
+    return list(progress(generated_inputs(synthetic), synthetic, "calibration crops"))

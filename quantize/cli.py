@@ -55,6 +55,7 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     require("onnx", extra="export")
     from doctrpp.benchmarks.accuracy import drift, predict
+    from doctrpp.export.tolerances import INT8_DRIFT_TARGET_PX
     from doctrpp.runtime.backends import ModelError
 
     from .calibration import HELD_OUT_SEED_OFFSET, generated_inputs, load_calibration
@@ -92,9 +93,12 @@ def run(args: argparse.Namespace) -> int:
             summary = drift(predict(args.model, held_out), predict(args.out, held_out))
         except ModelError as exc:
             raise CliError(str(exc)) from None
+        target = INT8_DRIFT_TARGET_PX
+        ok = summary.mean_px <= target["mean"] and summary.max_px <= target["max"]
         print(
             f"drift vs fp32 on {args.check} generated crops: mean {summary.mean_px:.3f} px, "
-            f"max {summary.max_px:.3f} px"
+            f"max {summary.max_px:.3f} px (target mean <= {target['mean']:g}, max <= "
+            f"{target['max']:g} px): {'meets the target' if ok else 'MISSES the target'}"
         )
     return 0
 

@@ -4,15 +4,16 @@ from __future__ import annotations
 
 import argparse
 import sys
+from concurrent.futures import ThreadPoolExecutor
+from functools import partial
 from pathlib import Path
 
 from doctrpp import contract
 from doctrpp.errors import CliError
-from doctrpp.files import save_npy_atomically
 from doctrpp.progress import progress
 
 from .backends import ModelError
-from .imageio import IMAGE_SUFFIXES, ImageError, read_image, write_image
+from .imageio import IMAGE_SUFFIXES, ImageError, has_alpha, read_image, write_image
 
 
 def add_parser(commands: argparse._SubParsersAction) -> None:
@@ -23,21 +24,44 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "folder (created; writes <stem>_rectified.png) or, with exactly one input file, an "
         "image path. Inputs are never overwritten.",
     )
-    p.add_argument("inputs", nargs="+", type=Path, metavar="INPUT")
+    p.add_argument("inputs", nargs="+", type=Path, metavar="INPUT", help="image files or folders")
     p.add_argument(
         "--model",
         type=Path,
-        help="model file (.onnx); default: the embedded weights, exported once to a cache "
-        "folder (needs the [export] extra)",
+        help="model file (.onnx, or .tflite with the [tflite] extra); default: the shipped "
+        "default model (doctrpp_fp32.onnx inside the package)",
     )
     p.add_argument("-o", "--out", type=Path, required=True, help="output folder or image path")
     p.add_argument(
         "--save-map",
         action="store_true",
-        help="also write <stem>_map.npy: float32 HxWx2 sampling positions in photo pixels (x, y)",
+        help="also write <stem>_map.npy: float32 HxWx2 sampling positions in photo pixels "
+        "(x, y); 8 bytes per pixel (864 MB for 108 MP), written strip by strip",
     )
-    p.add_argument("--threads", type=int, default=None, help="inference threads (default: all)")
+    p.add_argument(
+        "--threads",
+        type=positive_int,
+        default=None,
+        help="inference threads per image (default: onnxruntime's choice, all cores)",
+    )
+    p.add_argument(
+        "--jobs",
+        type=positive_int,
+        default=1,
+        help="images in flight at once: decode, inference, remap and encode overlap "
+        "(default 1; memory grows with it)",
+    )
     p.set_defaults(handler=run)
+
+
+def positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
 
 
 def collect_inputs(inputs: list[Path]) -> list[Path]:
@@ -92,9 +116,12 @@ def run(args: argparse.Namespace) -> int:
             raise CliError(f"output {target} would overwrite an input")
 
     if args.model is None:
-        from doctrpp.export.cli import default_onnx
+        from .models import NoShippedModel, shipped_model
 
-        args.model = default_onnx()
+        try:
+            args.model = shipped_model()
+        except NoShippedModel as exc:
+            raise CliError(str(exc)) from None
     try:
         rectifier = Rectifier(args.model, threads=args.threads)
     except ModelError as exc:
@@ -103,26 +130,20 @@ def run(args: argparse.Namespace) -> int:
     if "RANDOM" in note.upper():
         print(f"WARNING: {args.model} holds {note}", file=sys.stderr)
 
-    failures: list[str] = []
     pairs = list(zip(files, outputs, strict=True))
-    for source, target in progress(pairs, len(pairs), "rectify", enabled=len(pairs) > 1):
-        try:
-            image = read_image(source)
-            result = rectifier.run(image)
-            write_image(target, result.rectified)
-            if args.save_map:
-                map_path = target.with_name(target.stem.removesuffix("_rectified") + "_map.npy")
-                save_npy_atomically(map_path, result.photo_map().astype("float32"))
-        except (ImageError, ValueError) as exc:
-            failures.append(str(exc) if str(source) in str(exc) else f"{source}: {exc}")
-            continue
-        if len(pairs) == 1:
-            t = result.timings
-            print(
-                f"wrote {target} ({image.shape[1]}x{image.shape[0]}; preprocess "
-                f"{t['preprocess'] * 1e3:.0f} ms, inference {t['inference'] * 1e3:.0f} ms, "
-                f"postprocess {t['postprocess'] * 1e3:.0f} ms)"
-            )
+    job = partial(rectify_file, rectifier, save_map=args.save_map)
+    failures: list[str] = []
+    with ThreadPoolExecutor(max_workers=args.jobs) as pool:  # OpenCV and onnxruntime
+        results = pool.map(job, pairs)  # release the GIL, so threads overlap for real
+        for (source, _target), (message, line) in progress(
+            zip(pairs, results, strict=True), len(pairs), "rectify", enabled=len(pairs) > 1
+        ):
+            if message:
+                failures.append(message)
+            elif len(pairs) == 1:
+                print(line)
+            for note_line in NOTES.pop(source, []):
+                print(f"note: {source}: {note_line}", file=sys.stderr)
     if len(pairs) > 1:
         print(f"rectified {len(pairs) - len(failures)} of {len(pairs)} images into {args.out}")
     if failures:
@@ -131,3 +152,53 @@ def run(args: argparse.Namespace) -> int:
             print(f"  {line}", file=sys.stderr)
         return 1
     return 0
+
+
+NOTES: dict[Path, list[str]] = {}  # per input, printed in input order
+NO_ALPHA_SUFFIXES = frozenset({".jpg", ".jpeg", ".bmp", ".jp2", ".pgm", ".ppm", ".pbm"})
+BIG_MAP_BYTES = 256 * 2**20
+
+
+def rectify_file(rectifier, pair: tuple[Path, Path], save_map: bool) -> tuple[str, str]:
+    """Read, rectify, write one photo: ("", summary line) or (error message, "")."""
+    source, target = pair
+    try:
+        image = read_image(source)
+        result = rectifier.run(image)
+        rectified = result.rectified
+        if has_alpha(rectified) and target.suffix.lower() in NO_ALPHA_SUFFIXES:
+            NOTES.setdefault(source, []).append(f"alpha dropped: {target.suffix} holds none")
+            rectified = rectified[:, :, :3]
+        write_image(target, rectified)
+        if save_map:
+            map_path = target.with_name(target.stem.removesuffix("_rectified") + "_map.npy")
+            size = save_photo_map(map_path, result)
+            if size > BIG_MAP_BYTES:
+                NOTES.setdefault(source, []).append(f"map {map_path} is {size / 2**20:.0f} MB")
+    except (ImageError, ValueError, OSError) as exc:
+        return (str(exc) if str(source) in str(exc) else f"{source}: {exc}"), ""
+    t = result.timings
+    line = (
+        f"wrote {target} ({image.shape[1]}x{image.shape[0]}; preprocess "
+        f"{t['preprocess'] * 1e3:.0f} ms, inference {t['inference'] * 1e3:.0f} ms, "
+        f"postprocess {t['postprocess'] * 1e3:.0f} ms)"
+    )
+    return "", line
+
+
+def save_photo_map(path: Path, result) -> int:
+    """The full-resolution map as .npy, filled strip by strip in a memory-mapped temp file
+    and renamed into place (atomic, and never all in memory)."""
+    import numpy as np
+
+    height, width = result.rectified.shape[:2]
+    temporary = path.with_name(f".{path.name}.tmp")
+    try:
+        out = np.lib.format.open_memmap(temporary, "w+", np.float32, (height, width, 2))
+        result.photo_map(out=out)
+        out.flush()
+        del out
+        temporary.replace(path)
+    finally:
+        temporary.unlink(missing_ok=True)
+    return path.stat().st_size

@@ -1,60 +1,132 @@
-"""Pre- and post-processing exactly as the reference inference script does them."""
+"""Pre- and post-processing as the reference inference script does them, in bounded memory.
+
+Pre-processing resizes the photo in its own depth and converts only the 288x288 result to
+float (the reference converts the full photo first; the difference is under one grey
+level, tested). Post-processing builds the full-resolution map and remaps the photo in
+strips of rows, so memory grows with the output image, not with float copies of it; a
+pixel's value does not depend on the strip size (tested: strip-wise equals one-shot).
+"""
 
 from __future__ import annotations
+
+from collections.abc import Iterator
 
 import cv2
 import numpy as np
 
+STRIP_ROWS = 256  # rows of the full-resolution map held at once
+
 
 def to_unit_rgb(image: np.ndarray) -> np.ndarray:
     """BGR/BGRA/gray uint8, uint16 or float in [0, 1] -> float32 RGB in [0, 1], HxWx3."""
+    check_image(image)
     if image.ndim == 2:
         image = image[:, :, None]
-    if image.ndim != 3 or image.shape[2] not in (1, 3, 4) or min(image.shape[:2]) < 1:
-        raise ValueError(f"expected an HxW, HxWx3 or HxWx4 image, got shape {image.shape}")
     if image.dtype == np.uint8:
         scaled = image.astype(np.float32) / 255.0
     elif image.dtype == np.uint16:
         scaled = image.astype(np.float32) / 65535.0
-    elif image.dtype in (np.float32, np.float64):
-        scaled = image.astype(np.float32)
     else:
-        raise ValueError(f"unsupported image dtype {image.dtype} (use uint8, uint16 or float)")
+        scaled = image.astype(np.float32)
     if scaled.shape[2] == 1:
         return np.repeat(scaled, 3, axis=2)
     return np.ascontiguousarray(scaled[:, :, 2::-1])  # BGR(A) -> RGB
 
 
+def check_image(image: np.ndarray) -> None:
+    shape_ok = image.ndim == 2 or (image.ndim == 3 and image.shape[2] in (1, 3, 4))
+    if not shape_ok or min(image.shape[:2]) < 1:
+        raise ValueError(f"expected an HxW, HxWx3 or HxWx4 image, got shape {image.shape}")
+    if image.dtype not in (np.uint8, np.uint16, np.float32, np.float64):
+        raise ValueError(f"unsupported image dtype {image.dtype} (use uint8, uint16 or float)")
+
+
 def model_input(image: np.ndarray, size: int) -> np.ndarray:
     """Photo -> (1, 3, size, size) float32, RGB in [0, 1], resized bilinearly.
 
-    The reference resizes the float image (not the uint8 one); so do we.
+    Resized in the photo's own depth, then converted: no full-resolution float copy.
     """
-    rgb = cv2.resize(to_unit_rgb(image), (size, size), interpolation=cv2.INTER_LINEAR)
+    check_image(image)
+    source = image if image.ndim == 2 or image.shape[2] != 1 else image[:, :, 0]
+    if source.ndim == 3 and source.shape[2] == 4:
+        source = source[:, :, :3]  # alpha does not reach the model
+    small = cv2.resize(source, (size, size), interpolation=cv2.INTER_LINEAR)
+    rgb = to_unit_rgb(small)
     return np.ascontiguousarray(rgb.transpose(2, 0, 1)[None])
 
 
-def photo_map(backward_map: np.ndarray, height: int, width: int) -> np.ndarray:
-    """(h, w, 2) normalised backward map -> (height, width, 2) map in photo pixels.
+def _reflect101(index: np.ndarray, n: int) -> np.ndarray:
+    """OpenCV's BORDER_REFLECT_101 index mapping (…, 2, 1 | 0, 1, …, n-1 | n-2, …)."""
+    if n == 1:
+        return np.zeros_like(index)
+    index = np.abs(index)
+    return np.where(index >= n, 2 * (n - 1) - index, index)
 
-    Resize each channel bilinearly to the photo, blur with a 3x3 box, then convert
-    from align_corners=True coordinates to pixel positions.
+
+def _rows_of_resized(across: np.ndarray, rows: np.ndarray, height: int) -> np.ndarray:
+    """Rows `rows` of `across` (S, W, 2) resized bilinearly to `height` rows (cv2 convention:
+    half-pixel centres, clamped at the borders)."""
+    s = across.shape[0]
+    source = np.clip((rows + 0.5) * (s / height) - 0.5, 0, s - 1)
+    low = np.floor(source).astype(int)
+    high = np.minimum(low + 1, s - 1)
+    weight = (source - low).astype(np.float32)[:, None, None]
+    return across[low] * (1 - weight) + across[high] * weight
+
+
+def _box3(block: np.ndarray, width: int) -> np.ndarray:
+    """3x3 mean of the interior rows of `block` (n + 2 rows, halo included), reflect-101
+    across columns; a fixed summation order, so every pixel is the same in any strip."""
+    vertical = block[:-2] + block[1:-1] + block[2:]
+    columns = _reflect101(np.arange(-1, width + 1), width)
+    padded = vertical[:, columns]
+    return (padded[:, :-2] + padded[:, 1:-1] + padded[:, 2:]) / np.float32(9)
+
+
+def photo_map_strips(
+    backward_map: np.ndarray, height: int, width: int, strip_rows: int = STRIP_ROWS
+) -> Iterator[tuple[int, np.ndarray]]:
+    """(first row, (rows, width, 2) map in photo pixels) for consecutive strips of rows.
+
+    Each channel of the model-grid map is resized bilinearly to width x height, blurred
+    with a 3x3 box (reflect-101 borders, as cv2.blur) and converted from align_corners
+    coordinates to pixel positions.
     """
-    channels = []
-    for c, size in ((0, width), (1, height)):
-        resized = cv2.resize(
-            np.ascontiguousarray(backward_map[:, :, c], dtype=np.float32),
-            (width, height),
-            interpolation=cv2.INTER_LINEAR,
-        )
-        blurred = cv2.blur(resized, (3, 3))
-        channels.append((blurred + 1.0) * 0.5 * (size - 1))
-    return np.stack(channels, axis=2)
+    across = cv2.resize(
+        np.ascontiguousarray(backward_map, dtype=np.float32),
+        (width, backward_map.shape[0]),
+        interpolation=cv2.INTER_LINEAR,
+    )  # (S, width, 2): columns resized once, rows resized per strip
+    scale = np.array([(width - 1) / 2, (height - 1) / 2], np.float32)
+    for top in range(0, height, strip_rows):
+        bottom = min(top + strip_rows, height)
+        rows = _reflect101(np.arange(top - 1, bottom + 1), height)
+        block = _rows_of_resized(across, rows, height)
+        yield top, (_box3(block, width) + np.float32(1)) * scale
 
 
-def rectify_with_map(image: np.ndarray, backward_map: np.ndarray) -> np.ndarray:
-    """The reference post-processing: the model-grid map applied to the full photo."""
-    return remap(image, photo_map(backward_map, image.shape[0], image.shape[1]))
+def photo_map(backward_map: np.ndarray, height: int, width: int, out=None) -> np.ndarray:
+    """(h, w, 2) normalised backward map -> (height, width, 2) float32 map in photo pixels.
+
+    `out`: an array (or np.memmap) of that shape to fill, e.g. to write a huge map to disk.
+    """
+    if out is None:
+        out = np.empty((height, width, 2), np.float32)
+    for top, strip in photo_map_strips(backward_map, height, width):
+        out[top : top + len(strip)] = strip
+    return out
+
+
+def rectify_with_map(
+    image: np.ndarray, backward_map: np.ndarray, strip_rows: int = STRIP_ROWS
+) -> np.ndarray:
+    """The reference post-processing, strip by strip: same size, channels and dtype; an
+    alpha channel is remapped like the colour (transparent outside the photo)."""
+    height, width = image.shape[:2]
+    out = np.empty_like(image)
+    for top, strip in photo_map_strips(backward_map, height, width, strip_rows):
+        out[top : top + len(strip)] = remap(image, strip).reshape(out[top : top + len(strip)].shape)
+    return out
 
 
 def remap(image: np.ndarray, pixel_map: np.ndarray) -> np.ndarray:

@@ -21,14 +21,18 @@ class RectificationResult:
     backward_map: np.ndarray  # (S, S, 2) normalised, x then y
     timings: dict[str, float] = field(default_factory=dict)  # seconds per stage
 
-    def photo_map(self) -> np.ndarray:
-        """The full-resolution map in photo pixels (H, W, 2), as used for the remap."""
+    def photo_map(self, out: np.ndarray | None = None) -> np.ndarray:
+        """The full-resolution map in photo pixels (H, W, 2), as used for the remap.
+
+        8 bytes per pixel: pass `out` (e.g. an np.memmap) to keep a huge one on disk.
+        """
         height, width = self.rectified.shape[:2]
-        return photo_map(self.backward_map, height, width)
+        return photo_map(self.backward_map, height, width, out=out)
 
 
 class Rectifier:
-    """Runs a DocTr++ model file (.onnx) on photos given as OpenCV arrays (BGR or gray)."""
+    """Runs a DocTr++ model file (.onnx or .tflite) on photos given as OpenCV arrays
+    (gray, BGR or BGRA; an alpha channel is remapped like the colour)."""
 
     def __init__(self, model_path: str | Path, threads: int | None = None) -> None:
         self.model_path = Path(model_path)

@@ -45,11 +45,19 @@ def test_postprocess_equals_reference_grid_sample(document_photo, report_differe
     assert worst <= 1
 
 
-def test_model_input_matches_reference_preprocessing(document_photo):
-    reference = cv2.resize(document_photo[:, :, ::-1] / 255.0, (288, 288)).transpose(2, 0, 1)
-    ours = model_input(document_photo, 288)[0]
-    assert ours.dtype == np.float32
-    assert np.abs(ours - reference).max() < 1e-6
+def test_model_input_matches_reference_preprocessing(document_photo, report_difference):
+    """We resize in the photo's depth, the reference resizes a float copy: < 1 grey level."""
+    noisy = np.random.default_rng(0).integers(0, 256, (1200, 900, 3), dtype=np.uint8)
+    for photo in (document_photo, noisy, noisy.astype(np.uint16) * 257):
+        scale = 65535.0 if photo.dtype == np.uint16 else 255.0
+        reference = cv2.resize(photo[:, :, ::-1] / scale, (288, 288)).transpose(2, 0, 1)
+        ours = model_input(photo, 288)[0]
+        assert ours.dtype == np.float32
+        worst = float(np.abs(ours - reference).max() * 255)
+        report_difference(
+            f"model input vs float-first resize ({photo.dtype})", worst, 1.0, unit="grey levels"
+        )
+        assert worst < 1.0
 
 
 def test_rectifier_on_tiny_model(tiny_onnx, tiny_model, document_photo):
@@ -82,10 +90,11 @@ def test_input_kinds_keep_size_channels_and_depth(tiny_onnx, document_photo, con
     rectifier = Rectifier(tiny_onnx)
     out = rectifier.rectify(image)
     assert out.shape == image.shape and out.dtype == image.dtype
-    # All kinds feed the same model input as the 8-bit BGR photo.
+    # All kinds feed the model input of the 8-bit BGR photo, within one grey level (each is
+    # resized in its own depth).
     base = model_input(document_photo, 288)
     if image.ndim == 3:
-        assert np.abs(model_input(image, 288) - base).max() < 1e-5
+        assert np.abs(model_input(image, 288) - base).max() < 1 / 255
 
 
 def test_bad_arrays_rejected(tiny_onnx):

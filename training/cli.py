@@ -15,7 +15,7 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "train",
         help="train weights on generated crops (CPU or GPUs; torchrun for several)",
         description="Train the DocTr++ network with the paper's recipe (L1 on the backward map, "
-        "AdamW, OneCycle max lr 1e-4 with 10%% warm-up, HSV jitter) on UDIR-style crops "
+        "AdamW, OneCycle max lr 1e-4 with 10% warm-up, HSV jitter) on UDIR-style crops "
         "generated on the fly. Checkpoints RUN_DIR/last.pth and best.pth; logs log.csv and "
         "validation.jsonl. Several GPUs/nodes: torchrun --nproc_per_node N -m doctrpp train ...",
     )
@@ -58,8 +58,18 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p.add_argument("--workers", type=int, default=1, help="data generator processes")
     p.add_argument("--threads", type=int, help="torch threads per process")
     p.add_argument("--no-bf16", action="store_true", help="train in fp32 (no bf16 autocast)")
-    p.add_argument("--validate-every", type=int, default=200)
-    p.add_argument("--checkpoint-every", type=int, default=50)
+    p.add_argument(
+        "--validate-every",
+        type=int,
+        default=200,
+        help="steps between validations (and snapshots); default 200",
+    )
+    p.add_argument(
+        "--checkpoint-every",
+        type=int,
+        default=50,
+        help="steps between writes of RUN_DIR/last.pth; default 50",
+    )
     p.add_argument("--validation-size", type=int, default=48, help="fixed validation crops")
     p.add_argument("--max-minutes", type=float, help="stop cleanly after this long")
     p.add_argument("--seed", type=int, default=0, help="seed of the weights and generated data")

@@ -30,11 +30,21 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--out", type=Path, required=True, help="output folder (created)")
     p.add_argument("--n", type=int, required=True, help="number of samples")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--kind", choices=[*KINDS, "mixed"], default="mixed")
+    p.add_argument("--seed", type=int, default=0, help="sample i uses seed S+i (default 0)")
+    p.add_argument(
+        "--kind",
+        choices=[*KINDS, "mixed"],
+        default="mixed",
+        help="crop kind (default mixed: equal thirds)",
+    )
     p.add_argument("--size", type=int, default=288, help="crop and flat-target size in pixels")
     p.add_argument("--from-photos", type=Path, metavar="FOLDER", help="cut crops from these photos")
-    p.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=os.cpu_count() or 1,
+        help="generator processes (default: all cores)",
+    )
     p.set_defaults(handler=run_crops)
 
     s = commands.add_parser(
