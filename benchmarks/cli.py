@@ -40,6 +40,12 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p.add_argument("--note", help="a line for the report (e.g. which weights these are)")
     p.add_argument("--no-rss", action="store_true", help="skip the peak-memory subprocesses")
     p.add_argument(
+        "--pipeline",
+        action="store_true",
+        help="also time the whole `doctrpp rectify` pipeline on 12 MP photos (--jobs 1 and 2) "
+        "and measure peak RSS on a 108 MP photo (first model; a few minutes)",
+    )
+    p.add_argument(
         "--torch-checkpoint",
         type=Path,
         help="also time our PyTorch model with this checkpoint (needs [export])",
@@ -104,7 +110,14 @@ def run(args: argparse.Namespace) -> int:
         from .torch_timing import torch_row
 
         extra_rows.append(torch_row(args.torch_checkpoint, reference, max(args.threads), args.runs))
+    pipeline = None
+    if args.pipeline:
+        from .pipeline import pipeline_report
+
+        _status(f"whole pipeline: {args.models[0].name} on 12 MP and 108 MP photos")
+        pipeline = pipeline_report(args.models[0], args.photos, threads=max(args.threads))
     report = {
+        "pipeline": pipeline,
         "environment": environment(),
         "settings": {
             "runs": args.runs,

@@ -103,6 +103,10 @@ def markdown(report: dict) -> str:
                 f"| {t['model']} | {t['check']} | {_fmt(t['value'])} | {t['target']} | "
                 f"{'yes' if t['met'] else '**no**'} |"
             )
+    if report.get("pipeline"):
+        from .pipeline import pipeline_markdown
+
+        lines += pipeline_markdown(report["pipeline"])
     return "\n".join(lines) + "\n"
 
 

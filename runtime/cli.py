@@ -187,17 +187,20 @@ def rectify_file(rectifier, pair: tuple[Path, Path], save_map: bool) -> tuple[st
 
 
 def save_photo_map(path: Path, result) -> int:
-    """The full-resolution map as .npy, filled strip by strip in a memory-mapped temp file
-    and renamed into place (atomic, and never all in memory)."""
+    """The full-resolution map as .npy, written strip by strip to a temp file and renamed
+    into place: atomic, and never all in memory (8 bytes per pixel on disk)."""
     import numpy as np
+
+    from .processing import photo_map_strips
 
     height, width = result.rectified.shape[:2]
     temporary = path.with_name(f".{path.name}.tmp")
+    header = {"descr": "<f4", "fortran_order": False, "shape": (height, width, 2)}
     try:
-        out = np.lib.format.open_memmap(temporary, "w+", np.float32, (height, width, 2))
-        result.photo_map(out=out)
-        out.flush()
-        del out
+        with open(temporary, "wb") as f:
+            np.lib.format.write_array_header_1_0(f, header)
+            for _, strip in photo_map_strips(result.backward_map, height, width):
+                f.write(np.ascontiguousarray(strip, dtype="<f4").tobytes())
         temporary.replace(path)
     finally:
         temporary.unlink(missing_ok=True)
