@@ -40,12 +40,21 @@ def generated_probes(per_kind: int) -> list[Probe]:
     return probes
 
 
-def photo_probes(folder: Path | None) -> list[Probe]:
-    """The user's photos, or the real document photos scikit-image ships, if installed."""
+REAL_KINDS = ("real complete", "real partial", "real none")
+
+
+def photo_probes(folder: Path | None, limit: int = 12) -> list[Probe]:
+    """Crops of the three kinds cut from real photos (the user's `folder`, at most `limit`
+    spread over it; else the two document photos scikit-image ships, if installed)."""
     from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
+    from doctrpp.udir.photos import photo_crop_box
+    from doctrpp.udir.scene import KINDS
 
     if folder is not None:
         paths = sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+        paths = [
+            paths[i] for i in np.linspace(0, len(paths) - 1, min(limit, len(paths))).astype(int)
+        ]
     else:
         try:
             import skimage
@@ -53,7 +62,31 @@ def photo_probes(folder: Path | None) -> list[Probe]:
             return []
         data = Path(skimage.__file__).parent / "data"
         paths = [data / "page.png", data / "text.png"]
-    return [Probe(p.stem, "photo", read_image(p)) for p in paths if p.is_file()]
+    probes = []
+    for index, path in enumerate(p for p in paths if p.is_file()):
+        photo = read_image(path)
+        for kind in KINDS:
+            rng = np.random.default_rng([BENCH_SEED_OFFSET, index, KINDS.index(kind)])
+            x0, y0, x1, y1 = photo_crop_box(rng, photo.shape[0], photo.shape[1], kind)
+            probes.append(Probe(f"{path.stem}-{kind}", f"real {kind}", photo[y0:y1, x0:x1]))
+    return probes
+
+
+def untouched_accuracy(probes: list[Probe]) -> dict:
+    """The untouched input (identity map) against ground truth: the bar a model must clear."""
+    from doctrpp.training.validate import identity_map
+
+    rows: dict[str, dict[str, list[float]]] = {}
+    for probe in probes:
+        if probe.backward_map is None:
+            continue
+        image = _as_uint8_bgr(probe.image)
+        truth = rectify_with_map(image, probe.backward_map)
+        identity = identity_map(probe.backward_map.shape[0])
+        row = rows.setdefault(probe.kind, {"gt_map_error_px": [], "gt_ms_ssim_m": []})
+        row["gt_map_error_px"].append(map_drift(identity, probe.backward_map).mean_px)
+        row["gt_ms_ssim_m"].append(ms_ssim_masked(image, truth))
+    return {k: {m: float(np.mean(v)) for m, v in row.items()} for k, row in rows.items()}
 
 
 def _as_uint8_bgr(image: np.ndarray) -> np.ndarray:

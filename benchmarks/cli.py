@@ -36,7 +36,12 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         help="inference thread counts to time each model at (default 1 2)",
     )
     p.add_argument("--per-kind", type=int, default=10, help="generated crops per kind")
-    p.add_argument("--photos", type=Path, help="folder of real photos (default: scikit-image's)")
+    p.add_argument(
+        "--photos",
+        type=Path,
+        help="folder of real photos: up to 12 of them, each cut into complete, partial and "
+        "no-boundary crops (default: scikit-image's two document photos)",
+    )
     p.add_argument("--note", help="a line for the report (e.g. which weights these are)")
     p.add_argument("--no-rss", action="store_true", help="skip the peak-memory subprocesses")
     p.add_argument(
@@ -60,8 +65,8 @@ def _status(message: str) -> None:
 def run(args: argparse.Namespace) -> int:
     from doctrpp import contract
 
-    from .bench import accuracy, describe, generated_probes, photo_probes
-    from .environment import environment
+    from .bench import accuracy, describe, generated_probes, photo_probes, untouched_accuracy
+    from .environment import environment, load_average
     from .report import write_report
     from .timing import interleaved_latency, peak_rss_mb
 
@@ -93,16 +98,16 @@ def run(args: argparse.Namespace) -> int:
         args.runs,
         progress=lambda i, n: _status(f"  round {i}/{n}") if i % 5 == 0 else None,
     )
-    ref_two = latencies.get((str(reference), max(args.threads)))
     for record, path in zip(models, args.models, strict=True):
         record["latency"] = {
             str(t): {**latencies[(str(path), t)].__dict__, "fps": latencies[(str(path), t)].fps}
             for t in args.threads
         }
-        if ref_two:
-            record["latency_ratio"] = latencies[(str(path), max(args.threads))].median_ms / (
-                ref_two.median_ms
-            )
+        record["latency_ratio_by_threads"] = {
+            str(t): latencies[(str(path), t)].median_ms / latencies[(str(reference), t)].median_ms
+            for t in args.threads
+        }
+        record["latency_ratio"] = record["latency_ratio_by_threads"][str(max(args.threads))]
         if not args.no_rss:
             record["peak_rss_mb"] = peak_rss_mb(path, max(args.threads))
     extra_rows = []
@@ -117,6 +122,8 @@ def run(args: argparse.Namespace) -> int:
         _status(f"whole pipeline: {args.models[0].name} on 12 MP and 108 MP photos")
         pipeline = pipeline_report(args.models[0], args.photos, threads=max(args.threads))
     report = {
+        "untouched": untouched_accuracy(probes),
+        "load_average": load_average(),
         "pipeline": pipeline,
         "environment": environment(),
         "settings": {

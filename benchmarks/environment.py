@@ -51,3 +51,11 @@ def environment() -> dict:
         "packages": versions,
         "allocator": allocator or "glibc malloc defaults (no MALLOC_* variables set)",
     }
+
+
+def load_average() -> float | None:
+    """1-minute load average (other work on the machine makes timings noisy)."""
+    try:
+        return os.getloadavg()[0]
+    except OSError:
+        return None

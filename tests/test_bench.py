@@ -37,10 +37,14 @@ def test_bench_report(tiny_onnx, tmp_path):
     assert "gt_map_error_px" in q["accuracy"]["none"]
     assert q["peak_rss_mb"] > 10
     assert report["environment"]["allocator"]
-    assert {t["check"] for t in report["targets"]} >= {"max drift px", "file MB"}
+    checks = {t["check"] for t in report["targets"]}
+    assert {"max drift px (generated crops)", "latency vs reference, 1 thread", "file MB"} <= checks
+    assert set(report["untouched"]) == {"complete", "partial", "none"}
     markdown = (out / "report.md").read_text()
     assert "| tiny_int8.onnx | onnx | int8 |" in markdown
     assert "allocator" in markdown
+    assert "| untouched input | none |" in markdown
+    assert "- phone:" in markdown and "- CPU server:" in markdown
     assert (out / "latency.png").is_file() and (out / "drift_vs_latency.png").is_file()
 
 

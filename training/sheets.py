@@ -1,0 +1,90 @@
+"""Contact sheets on real photos: the photo, then its rectification by each set of weights.
+
+usage: python -m doctrpp.training.sheets --weights OLD.pt NEW.pt --photos DIR -o sheet.png
+       [--kind complete|partial|none] [--count 4] [--size 256]
+
+Rows are photos (crops of the asked kind, cut as the real-photo check cuts them); columns
+are the untouched crop and one rectification per weights file, labelled.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import cv2
+import numpy as np
+import torch
+
+from doctrpp.export.checkpoint import load_model
+from doctrpp.files import write_bytes_atomically
+from doctrpp.runtime.processing import rectify_with_map
+
+from .realcheck import predict, real_photo_set
+
+
+def _label(tile: np.ndarray, text: str) -> np.ndarray:
+    out = tile.copy()
+    cv2.rectangle(out, (0, 0), (out.shape[1], 18), (255, 255, 255), -1)
+    cv2.putText(out, text, (4, 13), cv2.FONT_HERSHEY_SIMPLEX, 0.42, (0, 0, 0), 1, cv2.LINE_AA)
+    return out
+
+
+def sheet(
+    weights: list[Path],
+    labels: list[str],
+    photos: Path,
+    kind: str,
+    count: int,
+    size: int,
+    first: int = 0,
+) -> np.ndarray:
+    items = [it for it in real_photo_set(photos, photos=first + count) if it.kind == kind]
+    items = items[first : first + count]
+    columns = [
+        [
+            _label(
+                cv2.resize(it.image, (size, size), interpolation=cv2.INTER_AREA),
+                f"{it.name} {kind}",
+            )
+            for it in items
+        ]
+    ]
+    for path, label in zip(weights, labels, strict=True):
+        model = load_model(path).eval()
+        with torch.no_grad():
+            maps = predict(model, items)
+        column = []
+        for item, backward_map in zip(items, maps, strict=True):
+            rectified = rectify_with_map(item.image, backward_map)
+            column.append(
+                _label(cv2.resize(rectified, (size, size), interpolation=cv2.INTER_AREA), label)
+            )
+        columns.append(column)
+    rows = [np.hstack([col[r] for col in columns]) for r in range(len(items))]
+    return np.vstack(rows)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m doctrpp.training.sheets", description=__doc__)
+    parser.add_argument("--weights", type=Path, nargs="+", required=True, help="weights files")
+    parser.add_argument("--labels", nargs="+", help="column labels (default: file names)")
+    parser.add_argument("--photos", type=Path, required=True, help="folder of real photos")
+    parser.add_argument("-o", "--out", type=Path, required=True, help="output PNG")
+    parser.add_argument("--kind", default="complete", choices=["complete", "partial", "none"])
+    parser.add_argument("--count", type=int, default=4, help="photos (rows)")
+    parser.add_argument("--first", type=int, default=0, help="skip this many photos")
+    parser.add_argument("--size", type=int, default=256, help="tile side in pixels")
+    args = parser.parse_args(argv)
+    labels = args.labels or [p.stem for p in args.weights]
+    if len(labels) != len(args.weights):
+        parser.error("give one label per weights file")
+    image = sheet(args.weights, labels, args.photos, args.kind, args.count, args.size, args.first)
+    ok, data = cv2.imencode(".png", image)
+    write_bytes_atomically(args.out, data.tobytes())
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
