@@ -47,7 +47,17 @@ TINY = ModelConfig(
     hidden_dim=32, num_heads=2, ffn_dim=64, layers_per_block=1, backbone_widths=(8, 16, 24)
 )
 
-PRESETS: dict[str, ModelConfig] = {"reference": REFERENCE, "small": SMALL, "tiny": TINY}
+# Between tiny and small: twice tiny's widths (for longer CPU runs; see MODEL_CARD.md).
+MID = ModelConfig(
+    hidden_dim=64, num_heads=4, ffn_dim=256, layers_per_block=1, backbone_widths=(16, 32, 48)
+)
+
+PRESETS: dict[str, ModelConfig] = {
+    "reference": REFERENCE,
+    "small": SMALL,
+    "mid": MID,
+    "tiny": TINY,
+}
 
 
 def config_by_name(name: str) -> ModelConfig:

@@ -50,3 +50,37 @@ def test_bench_report(tiny_onnx, tmp_path):
 
 def test_bench_errors(tmp_path):
     assert main(["bench", "--models", str(tmp_path / "absent.onnx"), "--out", str(tmp_path)]) == 2
+
+
+def test_whole_pipeline_section(tiny_onnx, tmp_path):
+    """bench --pipeline: images/s at each --jobs and peak RSS on one big photo (small here)."""
+    from doctrpp.benchmarks.pipeline import big_photo, pipeline_markdown, pipeline_report
+
+    report = pipeline_report(
+        tiny_onnx, None, count=2, jobs=(1, 2), threads=1, megapixels=(0.3, 1.0)
+    )
+    assert [row["jobs"] for row in report["throughput"]] == [1, 2]
+    assert all(row["images_per_s"] > 0 and row["peak_rss_mb"] > 10 for row in report["throughput"])
+    assert [row["save_map"] for row in report["memory"]] == [False, True]
+    text = "\n".join(pipeline_markdown(report))
+    assert "images/s" in text and "peak RSS MB" in text
+    import numpy as np
+
+    assert abs(big_photo(np.zeros((300, 200, 3), np.uint8), 12).size / 3 / 12e6 - 1) < 0.01
+
+
+def test_sheets_and_int8_recipe_inputs(tiny_checkpoint, tmp_path):
+    import cv2
+
+    from doctrpp.benchmarks.int8_recipes import calibration_set
+    from doctrpp.training.sheets import sheet
+    from doctrpp.udir.sample import generate
+
+    photos = tmp_path / "photos"
+    photos.mkdir()
+    for i in range(3):
+        cv2.imwrite(str(photos / f"p{i}.jpg"), generate(i, "complete", size=320).image)
+    image = sheet([tiny_checkpoint, tiny_checkpoint], ["a", "b"], photos, "none", 2, 64)
+    assert image.shape == (128, 192, 3)
+    inputs = calibration_set("mixed", sorted(photos.iterdir()), 4)
+    assert len(inputs) == 4 and inputs[0].shape == (1, 3, 288, 288)

@@ -229,21 +229,27 @@ def test_sigterm_to_the_process_group_checkpoints_cleanly(tmp_path):
     assert state["step"] >= 1
 
 
+def quick_settings(out, **changes) -> TrainSettings:
+    """A few steps of the tiny config on generated crops, validating at the end."""
+    base = dict(
+        out=out,
+        config=TINY,
+        steps=2,
+        batch=2,
+        workers=0,
+        threads=2,
+        validate_every=2,
+        validation_size=3,
+    )
+    return TrainSettings(**{**base, **changes})
+
+
 def test_init_continues_from_weights_only_file(tmp_path):
     """--init: weights from a weights-only file, step/stream/hours carried on, a new cycle."""
     from doctrpp.training.loop import carried_state
 
-    settings = TrainSettings(
-        out=tmp_path / "a",
-        config=TINY,
-        steps=4,
-        batch=2,
-        workers=0,
-        threads=2,
-        validate_every=4,
-        checkpoint_every=2,
-        validation_size=3,
-        kind="complete",
+    settings = quick_settings(
+        tmp_path / "a", steps=4, validate_every=4, checkpoint_every=2, kind="complete"
     )
     train(settings)
     snapshot = tmp_path / "a" / "snapshots" / "step0000004.pt"
@@ -267,19 +273,7 @@ def test_real_photo_check_is_logged_with_validation(tmp_path):
     photos = tmp_path / "photos"
     for i in range(2):
         write_image(photos / f"p{i}.jpg", generate(i, "complete", size=400).image)
-    settings = TrainSettings(
-        out=tmp_path / "run",
-        config=TINY,
-        steps=2,
-        batch=2,
-        workers=0,
-        threads=2,
-        validate_every=2,
-        validation_size=3,
-        real_photos=photos,
-        real_photos_count=2,
-    )
-    train(settings)
+    train(quick_settings(tmp_path / "run", real_photos=photos, real_photos_count=2))
     records = [
         json.loads(x) for x in (tmp_path / "run" / "validation.jsonl").read_text().splitlines()
     ]
