@@ -281,3 +281,18 @@ def test_real_photo_check_is_logged_with_validation(tmp_path):
     for kind in ("complete", "partial", "none"):
         assert 0 <= records[-1][f"real/black_share/{kind}"] <= 1
         assert f"real/straightness_ratio/{kind}" in records[-1]
+
+
+def test_device_choice(tmp_path, capsys):
+    """--device cpu trains on the CPU (CI's path); --device cuda without a GPU is a clear error."""
+    from doctrpp.cli import main
+    from doctrpp.training.loop import default_workers
+
+    assert default_workers("cpu") == 1 and default_workers("cuda", world=1) >= 1
+    state = train(quick_settings(tmp_path / "cpu", device="cpu", steps=1, validate_every=1))
+    assert state["step"] == 1
+    if not torch.cuda.is_available():
+        code = main(
+            ["train", "--out", str(tmp_path / "gpu"), "--config", "tiny", "--device", "cuda"]
+        )
+        assert code == 2 and "no CUDA GPU" in capsys.readouterr().err

@@ -55,7 +55,17 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         help="curriculum: train this many steps on complete-boundary crops, then on --kind "
         "(CPU runs here needed it to leave the mean-map plateau)",
     )
-    p.add_argument("--workers", type=int, default=1, help="data generator processes")
+    p.add_argument(
+        "--workers",
+        type=int,
+        help="data generator processes (default: 1 on CPU; beside a GPU, the cores left over)",
+    )
+    p.add_argument(
+        "--device",
+        choices=["auto", "cuda", "cpu"],
+        default="auto",
+        help="where to train (default auto: CUDA when torch sees a GPU); bf16 autocast on both",
+    )
     p.add_argument("--threads", type=int, help="torch threads per process")
     p.add_argument("--no-bf16", action="store_true", help="train in fp32 (no bf16 autocast)")
     p.add_argument(
@@ -101,6 +111,11 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(str(exc)) from None
     if args.resume and not args.resume.is_file():
         raise CliError(f"--resume {args.resume}: no such file")
+    if args.device == "cuda":
+        import torch
+
+        if not torch.cuda.is_available():
+            raise CliError("--device cuda: torch sees no CUDA GPU on this machine")
     if args.init and args.resume:
         raise CliError("--init and --resume exclude each other (--resume keeps the optimiser)")
     if args.init and not args.init.is_file():
@@ -129,6 +144,7 @@ def run(args: argparse.Namespace) -> int:
         max_lr=args.lr,
         bf16=not args.no_bf16,
         workers=args.workers,
+        device=args.device,
         threads=args.threads,
         validate_every=args.validate_every,
         checkpoint_every=args.checkpoint_every,

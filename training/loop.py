@@ -36,7 +36,8 @@ class TrainSettings:
     warmup: float = 0.1
     weight_decay: float = 1e-4
     bf16: bool = True  # autocast; measured 1.5-1.8x faster on this CPU
-    workers: int = 1
+    workers: int | None = None  # data processes; None: 1 on CPU, the free cores beside a GPU
+    device: str = "auto"  # auto (CUDA when available) | cuda | cpu
     threads: int | None = None
     validate_every: int = 200
     checkpoint_every: int = 50
@@ -59,11 +60,13 @@ class TrainSettings:
 class Distributed:
     """torchrun sets WORLD_SIZE/RANK/LOCAL_RANK; without them this is one plain process."""
 
-    def __init__(self) -> None:
+    def __init__(self, device: str = "auto") -> None:
         self.world = int(os.environ.get("WORLD_SIZE", "1"))
         self.rank = int(os.environ.get("RANK", "0"))
         self.local_rank = int(os.environ.get("LOCAL_RANK", "0"))
-        if torch.cuda.is_available():
+        if device == "cuda" and not torch.cuda.is_available():
+            raise RuntimeError("--device cuda: no CUDA GPU is visible to torch")
+        if device != "cpu" and torch.cuda.is_available():
             self.device = torch.device("cuda", self.local_rank)
             torch.cuda.set_device(self.device)
         else:
@@ -121,8 +124,18 @@ def _schedule(optimiser, s: TrainSettings):
     )
 
 
+def default_workers(device_type: str, world: int = 1) -> int:
+    """On CPU one data process (the trainer needs the other core); beside a GPU, the cores
+    left after one per training process, so generation keeps up with the GPU."""
+    if device_type != "cuda":
+        return 1
+    return max(1, (os.cpu_count() or 2) // max(world, 1) - 1)
+
+
 def train(s: TrainSettings) -> dict:
-    env = Distributed()
+    env = Distributed(s.device)
+    if s.workers is None:
+        s = dataclasses.replace(s, workers=default_workers(env.device.type, env.world))
     if s.threads:
         torch.set_num_threads(s.threads)
     torch.manual_seed(s.seed)
