@@ -1,0 +1,52 @@
+"""Score weights files on the generated validation set and the real-photo check.
+
+usage: python -m doctrpp.training.score WEIGHTS... [--real-photos DIR] [--photos 16]
+
+Prints one JSON line per file (map error and MS-SSIM-M per kind, and with --real-photos
+the reference-free scores per kind), the identity map first as the baseline. Used to
+choose the checkpoint that ships (MODEL_CARD.md says how).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from doctrpp.export.checkpoint import load_model
+
+from .realcheck import predict as predict_real
+from .realcheck import real_photo_set, score_real
+from .validate import identity_map, predict_maps, score_maps, validation_set
+
+
+def score_file(path: Path | None, validation, real_items) -> dict:
+    if path is None:
+        maps = [identity_map()] * len(validation)
+        real_maps = [identity_map()] * len(real_items)
+    else:
+        model = load_model(path).eval()
+        maps = predict_maps(model, validation)
+        real_maps = predict_real(model, real_items) if real_items else []
+    scores = score_maps(validation, maps)
+    if real_items:
+        scores.update(score_real(real_items, real_maps))
+    return {"weights": str(path) if path else "identity", **scores}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m doctrpp.training.score", description=__doc__)
+    parser.add_argument("weights", type=Path, nargs="+", help="weights or checkpoint files")
+    parser.add_argument("--real-photos", type=Path, help="folder of real photos")
+    parser.add_argument("--photos", type=int, default=16, help="real photos used")
+    parser.add_argument("--validation-size", type=int, default=48)
+    args = parser.parse_args(argv)
+    validation = validation_set(args.validation_size)
+    real_items = real_photo_set(args.real_photos, args.photos) if args.real_photos else []
+    for path in [None, *args.weights]:
+        print(json.dumps(score_file(path, validation, real_items)), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
