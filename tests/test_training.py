@@ -174,6 +174,10 @@ def test_publish_writes_fp16_default_with_record(tmp_path):
         {"step": 5, "samples_seen": 40, "map_error_px/all": 30.0},
     ]
     (run / "validation.jsonl").write_text("".join(json.dumps(r) + "\n" for r in lines))
+    (run / "snapshots").mkdir()
+    torch.save(ckpt, run / "snapshots" / "step0000005.pt")  # a snapshot publishes alike
+    snapshot = publish(run / "snapshots" / "step0000005.pt", tmp_path / "from_snapshot", "test")
+    assert json.loads(snapshot.with_suffix(".json").read_text())["run"] == "run"
     weights = publish(run / "best.pth", tmp_path / "weights", note="test")
     record = json.loads(weights.with_suffix(".json").read_text())
     assert record["sha256"] == sha256_of(weights)

@@ -1,6 +1,7 @@
 """Turn a training checkpoint into the embedded default: fp16 weights + config + record.
 
 usage: python -m doctrpp.training.publish RUN_DIR/best.pth [--note TEXT] [--out DIR]
+       python -m doctrpp.training.publish RUN_DIR/snapshots/stepNNNNNNN.pt ...
 
 Writes doctrpp_default.pt (state dict in fp16, config, training record) and
 doctrpp_default.json (the same record plus the .pt file's sha256) into export/weights/.
@@ -51,7 +52,10 @@ def training_record(checkpoint: dict, run_dir: Path, note: str) -> dict:
 
 def publish(checkpoint_path: Path, out_dir: Path, note: str) -> Path:
     checkpoint = torch.load(checkpoint_path, map_location="cpu", weights_only=True)
-    record = training_record(checkpoint, checkpoint_path.parent, note)
+    run_dir = checkpoint_path.parent
+    if run_dir.name == "snapshots":  # RUN_DIR/snapshots/stepNNNNNNN.pt
+        run_dir = run_dir.parent
+    record = training_record(checkpoint, run_dir, note)
     payload = {
         "model": {
             k: v.half() if v.is_floating_point() else v for k, v in checkpoint["model"].items()
