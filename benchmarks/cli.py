@@ -130,7 +130,8 @@ def run(args: argparse.Namespace) -> int:
             "runs": args.runs,
             "threads": args.threads,
             "probes": f"{args.per_kind} generated crops per kind + "
-            f"{sum(p.kind == 'photo' for p in probes)} real photos",
+            f"{sum(p.kind.startswith('real') for p in probes) // 3} real photos cut into "
+            "complete, partial and no-boundary crops",
             "reference": str(reference),
             "weights": "; ".join(sorted(n for n in notes if n)) or "unknown",
             "input_size": contract.INPUT_SIZE,

@@ -86,8 +86,12 @@ def test_pickled_objects_refused(tmp_path):
 def test_not_a_checkpoint(tmp_path):
     path = tmp_path / "junk.pth"
     path.write_bytes(b"not a checkpoint")
-    with pytest.raises(CheckpointError, match="cannot read checkpoint"):
+    with pytest.raises(CheckpointError, match="is not a PyTorch checkpoint"):
         read_checkpoint(path)
+    png = tmp_path / "text.png"  # the case: an image given as the checkpoint
+    png.write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(64))
+    with pytest.raises(CheckpointError, match="text.png is not a PyTorch checkpoint"):
+        read_checkpoint(png)
     with pytest.raises(CheckpointError, match="not found"):
         read_checkpoint(tmp_path / "absent.pth")
     torch.save({"epoch": 1}, path)

@@ -70,7 +70,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--weights", type=Path, nargs="+", required=True, help="weights files")
     parser.add_argument("--labels", nargs="+", help="column labels (default: file names)")
     parser.add_argument("--photos", type=Path, required=True, help="folder of real photos")
-    parser.add_argument("-o", "--out", type=Path, required=True, help="output PNG")
+    parser.add_argument("-o", "--out", type=Path, required=True, help="output image (.png, .jpg)")
     parser.add_argument("--kind", default="complete", choices=["complete", "partial", "none"])
     parser.add_argument("--count", type=int, default=4, help="photos (rows)")
     parser.add_argument("--first", type=int, default=0, help="skip this many photos")
@@ -80,7 +80,7 @@ def main(argv: list[str] | None = None) -> int:
     if len(labels) != len(args.weights):
         parser.error("give one label per weights file")
     image = sheet(args.weights, labels, args.photos, args.kind, args.count, args.size, args.first)
-    ok, data = cv2.imencode(".png", image)
+    ok, data = cv2.imencode(args.out.suffix or ".png", image)
     write_bytes_atomically(args.out, data.tobytes())
     print(f"wrote {args.out}")
     return 0
