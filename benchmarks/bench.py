@@ -74,15 +74,13 @@ def photo_probes(folder: Path | None, limit: int = 12) -> list[Probe]:
 
 def untouched_accuracy(probes: list[Probe]) -> dict:
     """The untouched input (identity map) against ground truth: the bar a model must clear."""
-    from doctrpp.training.validate import identity_map
-
     rows: dict[str, dict[str, list[float]]] = {}
     for probe in probes:
         if probe.backward_map is None:
             continue
         image = _as_uint8_bgr(probe.image)
         truth = rectify_with_map(image, probe.backward_map)
-        identity = identity_map(probe.backward_map.shape[0])
+        identity = contract.identity_map(probe.backward_map.shape[0])
         row = rows.setdefault(probe.kind, {"gt_map_error_px": [], "gt_ms_ssim_m": []})
         row["gt_map_error_px"].append(map_drift(identity, probe.backward_map).mean_px)
         row["gt_ms_ssim_m"].append(ms_ssim_masked(image, truth))

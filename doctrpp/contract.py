@@ -43,3 +43,12 @@ def pixels_to_normalised(bm_pixels):
 def normalised_to_pixels(bm_normalised):
     """Inverse of `pixels_to_normalised`."""
     return (bm_normalised / BM_SHRINK + 1.0) / 2.0 * BM_DIVISOR
+
+
+def identity_map(size: int = INPUT_SIZE):
+    """The backward map that leaves a photo as it is: (size, size, 2) normalised, x then y."""
+    import numpy as np
+
+    g = np.linspace(-1, 1, size, dtype=np.float32)
+    x, y = np.meshgrid(g, g)
+    return np.stack([x, y], -1)

@@ -135,15 +135,15 @@ def run(args: argparse.Namespace) -> int:
     failures: list[str] = []
     with ThreadPoolExecutor(max_workers=args.jobs) as pool:  # OpenCV and onnxruntime
         results = pool.map(job, pairs)  # release the GIL, so threads overlap for real
-        for (source, _target), (message, line) in progress(
+        for (source, _target), (message, line, notes) in progress(
             zip(pairs, results, strict=True), len(pairs), "rectify", enabled=len(pairs) > 1
         ):
             if message:
                 failures.append(message)
             elif len(pairs) == 1:
                 print(line)
-            for note_line in NOTES.pop(source, []):
-                print(f"note: {source}: {note_line}", file=sys.stderr)
+            for note in notes:
+                print(f"note: {source}: {note}", file=sys.stderr)
     if len(pairs) > 1:
         print(f"rectified {len(pairs) - len(failures)} of {len(pairs)} images into {args.out}")
     if failures:
@@ -154,36 +154,36 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-NOTES: dict[Path, list[str]] = {}  # per input, printed in input order
 NO_ALPHA_SUFFIXES = frozenset({".jpg", ".jpeg", ".bmp", ".jp2", ".pgm", ".ppm", ".pbm"})
 BIG_MAP_BYTES = 256 * 2**20
 
 
-def rectify_file(rectifier, pair: tuple[Path, Path], save_map: bool) -> tuple[str, str]:
-    """Read, rectify, write one photo: ("", summary line) or (error message, "")."""
+def rectify_file(rectifier, pair: tuple[Path, Path], save_map: bool) -> tuple[str, str, list[str]]:
+    """Read, rectify, write one photo: (error message or "", summary line, notes)."""
     source, target = pair
+    notes: list[str] = []
     try:
         image = read_image(source)
         result = rectifier.run(image)
         rectified = result.rectified
         if has_alpha(rectified) and target.suffix.lower() in NO_ALPHA_SUFFIXES:
-            NOTES.setdefault(source, []).append(f"alpha dropped: {target.suffix} holds none")
+            notes.append(f"alpha dropped: {target.suffix} holds none")
             rectified = rectified[:, :, :3]
         write_image(target, rectified)
         if save_map:
             map_path = target.with_name(target.stem.removesuffix("_rectified") + "_map.npy")
             size = save_photo_map(map_path, result)
             if size > BIG_MAP_BYTES:
-                NOTES.setdefault(source, []).append(f"map {map_path} is {size / 2**20:.0f} MB")
+                notes.append(f"map {map_path} is {size / 2**20:.0f} MB")
     except (ImageError, ValueError, OSError) as exc:
-        return (str(exc) if str(source) in str(exc) else f"{source}: {exc}"), ""
+        return (str(exc) if str(source) in str(exc) else f"{source}: {exc}"), "", notes
     t = result.timings
     line = (
         f"wrote {target} ({image.shape[1]}x{image.shape[0]}; preprocess "
         f"{t['preprocess'] * 1e3:.0f} ms, inference {t['inference'] * 1e3:.0f} ms, "
         f"postprocess {t['postprocess'] * 1e3:.0f} ms)"
     )
-    return "", line
+    return "", line, notes
 
 
 def save_photo_map(path: Path, result) -> int:

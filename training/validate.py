@@ -9,6 +9,7 @@ import torch
 
 from doctrpp import contract
 from doctrpp.benchmarks.metrics import map_drift, ms_ssim_masked
+from doctrpp.contract import identity_map
 from doctrpp.runtime.processing import rectify_with_map
 from doctrpp.udir.sample import generate, kind_for_index
 
@@ -28,12 +29,6 @@ def validation_set(count: int = 48) -> list[ValidationItem]:
         sample = generate(VALIDATION_SEED_OFFSET + i, kind_for_index(i))
         items.append(ValidationItem(sample.kind, sample.image, sample.backward_map))
     return items
-
-
-def identity_map(size: int = contract.INPUT_SIZE) -> np.ndarray:
-    g = np.linspace(-1, 1, size, dtype=np.float32)
-    x, y = np.meshgrid(g, g)
-    return np.stack([x, y], -1)
 
 
 def score_maps(items: list[ValidationItem], predicted: list[np.ndarray]) -> dict[str, float]:
