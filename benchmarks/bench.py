@@ -47,14 +47,12 @@ def photo_probes(folder: Path | None, limit: int = 12) -> list[Probe]:
     """Crops of the three kinds cut from real photos (the user's `folder`, at most `limit`
     spread over it; else the two document photos scikit-image ships, if installed)."""
     from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
-    from doctrpp.udir.photos import photo_crop_box
-    from doctrpp.udir.scene import KINDS
+    from doctrpp.udir.photos import crops_of_each_kind, spread
 
     if folder is not None:
-        paths = sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
-        paths = [
-            paths[i] for i in np.linspace(0, len(paths) - 1, min(limit, len(paths))).astype(int)
-        ]
+        paths = spread(
+            sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES), limit
+        )
     else:
         try:
             import skimage
@@ -64,11 +62,8 @@ def photo_probes(folder: Path | None, limit: int = 12) -> list[Probe]:
         paths = [data / "page.png", data / "text.png"]
     probes = []
     for index, path in enumerate(p for p in paths if p.is_file()):
-        photo = read_image(path)
-        for kind in KINDS:
-            rng = np.random.default_rng([BENCH_SEED_OFFSET, index, KINDS.index(kind)])
-            x0, y0, x1, y1 = photo_crop_box(rng, photo.shape[0], photo.shape[1], kind)
-            probes.append(Probe(f"{path.stem}-{kind}", f"real {kind}", photo[y0:y1, x0:x1]))
+        for kind, crop in crops_of_each_kind(read_image(path), BENCH_SEED_OFFSET, index).items():
+            probes.append(Probe(f"{path.stem}-{kind}", f"real {kind}", crop))
     return probes
 
 

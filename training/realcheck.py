@@ -24,8 +24,7 @@ from doctrpp.benchmarks.reference_free import (
 )
 from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
 from doctrpp.runtime.processing import model_input, rectify_with_map
-from doctrpp.udir.photos import photo_crop_box
-from doctrpp.udir.scene import KINDS
+from doctrpp.udir.photos import crops_of_each_kind, spread
 
 
 @dataclass
@@ -41,14 +40,11 @@ def real_photo_set(folder: Path, photos: int = 32, seed: int = 0) -> list[RealIt
     files = sorted(f for f in Path(folder).iterdir() if f.suffix.lower() in IMAGE_SUFFIXES)
     if not files:
         raise FileNotFoundError(f"{folder}: no images")
-    picked = [files[i] for i in np.linspace(0, len(files) - 1, min(photos, len(files))).astype(int)]
     items = []
-    for index, path in enumerate(picked):
+    for index, path in enumerate(spread(files, photos)):
         photo = read_image(path)[:, :, :3]
-        for kind in KINDS:
-            rng = np.random.default_rng([seed, index, KINDS.index(kind)])
-            x0, y0, x1, y1 = photo_crop_box(rng, photo.shape[0], photo.shape[1], kind)
-            crop = cv2.resize(photo[y0:y1, x0:x1], (SCORE_SIZE, SCORE_SIZE), cv2.INTER_AREA)
+        for kind, crop in crops_of_each_kind(photo, seed, index).items():
+            crop = cv2.resize(crop, (SCORE_SIZE, SCORE_SIZE), cv2.INTER_AREA)
             items.append(RealItem(path.stem, kind, crop, line_straightness(crop)))
     return items
 

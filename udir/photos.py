@@ -37,3 +37,20 @@ def photo_crop_box(rng: np.random.Generator, height: int, width: int, kind: str)
     x1 = int(np.clip((cx + fw / 2) * width, x0 + 2, width))
     y1 = int(np.clip((cy + fh / 2) * height, y0 + 2, height))
     return x0, y0, x1, y1
+
+
+def spread(paths: list, count: int) -> list:
+    """`count` of `paths` (sorted by the caller) evenly spread over them."""
+    if not paths:
+        return []
+    return [paths[i] for i in np.linspace(0, len(paths) - 1, min(count, len(paths))).astype(int)]
+
+
+def crops_of_each_kind(photo: np.ndarray, seed: int, index: int) -> dict[str, np.ndarray]:
+    """One crop of each kind from `photo` (the `index`-th photo of a set), deterministic."""
+    crops = {}
+    for kind in KINDS:
+        rng = np.random.default_rng([seed, index, KINDS.index(kind)])
+        x0, y0, x1, y1 = photo_crop_box(rng, photo.shape[0], photo.shape[1], kind)
+        crops[kind] = photo[y0:y1, x0:x1]
+    return crops
