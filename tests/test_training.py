@@ -265,6 +265,7 @@ def test_init_continues_from_weights_only_file(tmp_path):
     state = train(dataclasses.replace(settings, out=tmp_path / "b", init=snapshot, steps=2))
     assert state["step"] == 6 and state["samples_seen"] == 12
     assert state["cpu_seconds"] > carried["cpu_seconds"]
+    assert state["data_cpu_seconds"] >= carried["data_cpu_seconds"] >= 0.0
     # the embedded default's record works as a starting point too
     record = {"training_record": {"step": 7, "samples_seen": 56, "cpu_hours": 1.0}}
     assert carried_state(record)["cpu_seconds"] == 3600.0
@@ -300,3 +301,16 @@ def test_device_choice(tmp_path, capsys):
             ["train", "--out", str(tmp_path / "gpu"), "--config", "tiny", "--device", "cuda"]
         )
         assert code == 2 and "no CUDA GPU" in capsys.readouterr().err
+
+
+def test_data_workers_cpu_time_is_counted():
+    """Generation runs in worker processes: their CPU time is what children_cpu_seconds adds."""
+    import subprocess
+    import sys
+
+    from doctrpp.training.loop import children_cpu_seconds
+
+    before = children_cpu_seconds()
+    busy = "import time\nt = time.process_time()\nwhile time.process_time() - t < 0.3: pass"
+    subprocess.run([sys.executable, "-c", busy], check=True)
+    assert children_cpu_seconds() - before >= 0.25

@@ -12,6 +12,7 @@ import pytest
 from doctrpp.cli import main
 from doctrpp.udir.sample import generate, kind_for_index, make_scene
 from doctrpp.udir.scene import KINDS
+from doctrpp.udir.surface import Fold, Lift, SurfaceParams, surface_points
 
 SIZE = 288
 SEEDS = range(200, 209)  # three of each kind
@@ -163,3 +164,26 @@ def test_crops_cli_errors(tmp_path, capsys):
         == 2
     )
     assert "no such folder" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "bend",
+    [
+        {"curl_amplitude": 0.2, "curl_frequency": 5.0, "curl_quadratic": 0.45},
+        {"folds": (Fold(angle=0.0, offset=0.1, height=0.35, sharpness=0.005),)},
+        {"lifts": (Lift(angle=0.0, start=0.1, strength=-3.0),)},
+    ],
+    ids=["curl", "fold", "lift"],
+)
+def test_bends_keep_the_paper_length(bend, report_difference):
+    """A line across a bend is as long in 3-D as on the flat page (paper does not stretch),
+    and the bend foreshortens it in the page plane."""
+    surface = SurfaceParams(width=0.75, **bend)
+    u = np.linspace(0, 1, 20001)
+    x, y, z = surface_points(surface, u, np.full_like(u, 0.5))
+    length = np.hypot(np.hypot(np.diff(x), np.diff(y)), np.diff(z)).sum()
+    report_difference(
+        "3-D length of a bent line / page width", abs(length / 0.75 - 1), 1e-3, unit=""
+    )
+    assert abs(length / 0.75 - 1) < 1e-3
+    assert x[-1] - x[0] < 0.75 * 0.99

@@ -166,6 +166,8 @@ def run(args: argparse.Namespace) -> int:
         return 0
     print(
         f"stopped at step {state['step']} ({state['samples_seen']} samples, "
-        f"{state['cpu_seconds'] / 3600:.2f} CPU hours); checkpoint {args.out / 'last.pth'}"
+        f"{state['cpu_seconds'] / 3600:.2f} CPU hours training, "
+        f"{state.get('data_cpu_seconds', 0.0) / 3600:.2f} generating data); "
+        f"checkpoint {args.out / 'last.pth'}"
     )
     return 0

@@ -102,7 +102,7 @@ def carried_state(weights: dict) -> dict:
     and the generated stream continues where that training stopped (no repeated samples)."""
     if "train_state" in weights:
         source = weights["train_state"]
-        keys = ("step", "samples_seen", "wall_seconds", "cpu_seconds")
+        keys = ("step", "samples_seen", "wall_seconds", "cpu_seconds", "data_cpu_seconds")
         return {k: source[k] for k in keys if k in source}
     record = weights.get("training_record", {})
     return {
@@ -110,7 +110,26 @@ def carried_state(weights: dict) -> dict:
         "samples_seen": int(record.get("samples_seen", 0)),
         "wall_seconds": 3600.0 * record.get("wall_hours", 0.0),
         "cpu_seconds": 3600.0 * record.get("cpu_hours", 0.0),
+        "data_cpu_seconds": 3600.0 * record.get("data_cpu_hours", 0.0),
     }
+
+
+def children_cpu_seconds() -> float:
+    """CPU time of this process's children (the data workers), live and finished.
+
+    Linux /proc; elsewhere only finished children count."""
+    finished = os.times()
+    total = finished.children_user + finished.children_system
+    ticks = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
+    me = os.getpid()
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue  # the process ended meanwhile
+        if int(fields[1]) == me:  # fields after the name: state, ppid, ..., utime, stime
+            total += (int(fields[11]) + int(fields[12])) / ticks
+    return total
 
 
 def _schedule(optimiser, s: TrainSettings):
@@ -207,11 +226,15 @@ def train(s: TrainSettings) -> dict:
     }
     autocast_dtype = torch.bfloat16 if s.bf16 else None
     started, cpu_started = time.time(), time.process_time()
+    data_started = children_cpu_seconds()
     wall_before, cpu_before = state["wall_seconds"], state["cpu_seconds"]
+    data_before = state.get("data_cpu_seconds", 0.0)
 
     def payload() -> dict:
         state["wall_seconds"] = wall_before + time.time() - started
         state["cpu_seconds"] = cpu_before + time.process_time() - cpu_started
+        # Data workers' time; with --workers 0 generation is already in cpu_seconds.
+        state["data_cpu_seconds"] = data_before + children_cpu_seconds() - data_started
         return {
             "model": model.state_dict(),
             "config": dataclasses.asdict(s.config),
@@ -238,6 +261,7 @@ def train(s: TrainSettings) -> dict:
             "step": state["step"],
             "samples_seen": state["samples_seen"],
             "cpu_hours": state["cpu_seconds"] / 3600,
+            "data_cpu_hours": state.get("data_cpu_seconds", 0.0) / 3600,
             **scores,
         }
         log.validation(record)

@@ -43,6 +43,8 @@ def training_record(checkpoint: dict, run_dir: Path, note: str) -> dict:
         "step": state["step"],
         "samples_seen": state["samples_seen"],
         "cpu_hours": round(state["cpu_seconds"] / 3600, 3),
+        # Data workers' CPU time, counted from session 4 on (earlier runs did not record it).
+        "data_cpu_hours": round(state.get("data_cpu_seconds", 0.0) / 3600, 3),
         "wall_hours": round(state["wall_seconds"] / 3600, 3),
         "date": datetime.date.today().isoformat(),
         "note": note,

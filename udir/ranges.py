@@ -37,6 +37,36 @@ LANDSCAPE_SHARE = 0.12  # of pages other than slides and receipts
 MARGIN = (0.04, 0.12)  # page margin / page side
 PAGE_LONG_SIDE = 1024  # px of the flat page texture
 
+# -- page geometry and camera (surface.py) -----------------------------------------------------
+# Lengths in page heights; bends keep the paper's length (text foreshortens where it turns).
+SURFACE_STYLES = {  # relative weights
+    "perspective": 0.08,
+    "curl": 0.2,
+    "cone": 0.1,
+    "fold": 0.16,
+    "lift": 0.12,
+    "crumple": 0.11,
+    "combined": 0.23,
+}
+CURL_AMPLITUDE = (0.03, 0.2)  # sine part of a curl
+CURL_FREQUENCY = (1.5, 5.0)  # radians per page height
+CURL_BOW = 0.45  # |quadratic part| of a curl (a cylinder-like bow)
+CONE = 1.2  # |growth| of a curl along its axis
+FOLDS_MAX = 3
+FOLD_OFFSET = 0.35  # |crease distance| from the page centre
+FOLD_SLOPE = 0.35  # |height gained per unit distance| from the crease
+FOLD_SHARPNESS = (0.005, 0.04)  # width of the crease's rounding
+LIFT_IN_COMBINED = 0.35  # share of combined surfaces that also lift an edge or corner
+LIFT_START = (0.2, 0.8)  # where the lift starts / centre-to-edge distance
+LIFT_EDGE_SLOPE = (0.4, 1.5)  # slope reached at the page edge
+LIFT_TOWARDS_CAMERA = 0.85
+BUMPS = (3, 14)  # crumpling: number of bumps (upper bound exclusive)
+BUMP_SIGMA = (0.06, 0.25)
+BUMP_HEIGHT = 0.03  # normal sigma
+TILT_SIGMA = 0.25  # radians, camera tilt about x and y
+ROLL_SIGMA = 0.15  # radians, camera roll
+CAMERA_DISTANCE = (1.6, 5.0)  # nearer = stronger perspective
+
 # -- paper and print (paper.py) -------------------------------------------------------------
 PAPER_WHITE_SHARE = 0.72  # the rest: cream/recycled (half) or light colours
 PAPER_WHITE = (226, 252)  # grey level of white paper

@@ -9,8 +9,15 @@ of the flat target *is* this forward map.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
+
+from . import ranges as R
+
+# Paper does not stretch: bends are applied along the page's arc length (tabulated).
+ARC_RANGE = 4.0  # |position| covered by the table, page heights
+ARC_SAMPLES = 8001
 
 
 @dataclass(frozen=True)
@@ -19,6 +26,15 @@ class Fold:
     offset: float  # signed distance of the crease from the page centre
     height: float  # how far the crease pushes out of the plane per unit distance
     sharpness: float  # smaller = sharper crease
+
+
+@dataclass(frozen=True)
+class Lift:
+    """An edge or corner bending up towards the camera (z grows like t^2 past `start`)."""
+
+    angle: float  # direction from the page centre towards the lifted edge (radians)
+    start: float  # signed distance from the page centre where the bend starts
+    strength: float  # z = strength * t^2 (smoothed) at t past the start
 
 
 @dataclass(frozen=True)
@@ -39,6 +55,7 @@ class SurfaceParams:
     curl_quadratic: float = 0.0  # cylinder-like bow
     cone: float = 0.0  # curl growing along the curl axis (conical curl)
     folds: tuple[Fold, ...] = ()
+    lifts: tuple[Lift, ...] = ()
     bumps: tuple[Bump, ...] = ()  # smooth crumpling
     # Camera: rotation (radians), distance and focal length in output pixels, principal point.
     tilt_x: float = 0.0
@@ -60,23 +77,68 @@ def _rotation(tilt_x: float, tilt_y: float, roll: float) -> np.ndarray:
     return rz @ ry @ rx
 
 
+def _profile(shape: tuple, c: np.ndarray) -> np.ndarray:
+    """Height of a 1-D bend at position c across it (c = 0 at the page centre)."""
+    kind, *q = shape
+    if kind == "curl":
+        amplitude, frequency, phase, quadratic = q
+        return amplitude * np.sin(frequency * c + phase) + quadratic * c**2
+    if kind == "fold":
+        offset, height, sharpness = q
+        d = c - offset
+        return height * (np.sqrt(d * d + sharpness**2) - sharpness)
+    start, strength = q  # lift: a smooth ramp t -> t^2 past the start
+    t = c - start
+    ramp = 0.5 * (t + np.sqrt(t * t + 1e-4))
+    return strength * ramp**2
+
+
+@lru_cache(maxsize=512)
+def _arc_table(shape: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """Arc length along the bent profile (0 at the centre) and the position it reaches."""
+    c = np.linspace(-ARC_RANGE, ARC_RANGE, ARC_SAMPLES)
+    slope = np.gradient(_profile(shape, c), c)
+    step = np.sqrt(1.0 + slope**2)
+    arc = np.concatenate([[0.0], np.cumsum(0.5 * (step[1:] + step[:-1]) * np.diff(c))])
+    arc -= np.interp(0.0, c, arc)
+    return arc, c
+
+
+def _bend(shape: tuple, flat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Flat position -> (position across the bend, height): the paper keeps its length."""
+    arc, c = _arc_table(shape)
+    inside = np.clip(flat, arc[0], arc[-1])
+    across = np.interp(inside, arc, c) + (flat - inside)  # straight beyond the table
+    return across, _profile(shape, across)
+
+
 def surface_points(p: SurfaceParams, u: np.ndarray, v: np.ndarray):
-    """Page (u, v) -> 3-D points (X, Y, Z) of the deformed page, centred on the origin."""
-    x = (u - 0.5) * p.width
-    y = v - 0.5
+    """Page (u, v) -> 3-D points (X, Y, Z) of the deformed page, centred on the origin.
+
+    Curls, folds and lifts are 1-D bends: each pulls the page in along its direction by
+    what the bend takes up, so text foreshortens where the paper turns away as on real
+    paper. Bumps (crumpling) are small height offsets.
+    """
+    x0 = (u - 0.5) * p.width
+    y0 = v - 0.5
+    x, y = x0 + 0.0, y0 + 0.0
     z = np.zeros(np.broadcast(u, v).shape)
+    bends: list[tuple[float, tuple, float]] = []  # (direction, shape, scale of the height)
     if p.curl_amplitude or p.curl_quadratic:
-        across = x * np.cos(p.curl_angle) + y * np.sin(p.curl_angle)
-        along = -x * np.sin(p.curl_angle) + y * np.cos(p.curl_angle)
-        profile = p.curl_amplitude * np.sin(p.curl_frequency * across + p.curl_phase)
-        profile = profile + p.curl_quadratic * across**2
-        z = z + profile * (1.0 + p.cone * along)
-    for f in p.folds:
-        d = x * np.cos(f.angle) + y * np.sin(f.angle) - f.offset
-        z = z + f.height * (np.sqrt(d * d + f.sharpness**2) - f.sharpness)
+        along = -x0 * np.sin(p.curl_angle) + y0 * np.cos(p.curl_angle)
+        shape = ("curl", p.curl_amplitude, p.curl_frequency, p.curl_phase, p.curl_quadratic)
+        bends.append((p.curl_angle, shape, 1.0 + p.cone * along))
+    bends += [(f.angle, ("fold", f.offset, f.height, f.sharpness), 1.0) for f in p.folds]
+    bends += [(lift.angle, ("lift", lift.start, lift.strength), 1.0) for lift in p.lifts]
+    for angle, shape, scale in bends:
+        cos, sin = np.cos(angle), np.sin(angle)
+        flat = x0 * cos + y0 * sin
+        across, height = _bend(shape, flat)
+        x, y = x + (across - flat) * cos, y + (across - flat) * sin
+        z = z + height * scale
     for b in p.bumps:
         bx, by = (b.u - 0.5) * p.width, b.v - 0.5
-        z = z + b.height * np.exp(-((x - bx) ** 2 + (y - by) ** 2) / (2 * b.sigma**2))
+        z = z + b.height * np.exp(-((x0 - bx) ** 2 + (y0 - by) ** 2) / (2 * b.sigma**2))
     return x, y, z
 
 
@@ -155,54 +217,60 @@ def _homography(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
 def random_surface(
     rng: np.random.Generator, width: float, style: str | None = None
 ) -> SurfaceParams:
-    """Plausible deformations: perspective, curl, cone, folds, crumpling, or combinations."""
-    style = style or str(
-        rng.choice(
-            ["perspective", "curl", "cone", "fold", "crumple", "combined"],
-            p=[0.1, 0.22, 0.12, 0.18, 0.13, 0.25],
-        )
-    )
+    """Plausible deformations: perspective, curl, cone, folds, lifted edges, crumpling, or
+    combinations (ranges in ranges.py)."""
+    style = style or str(rng.choice(list(R.SURFACE_STYLES), p=list(R.SURFACE_STYLES.values())))
     kw: dict = {}
     if style in ("curl", "cone", "combined"):
         kw.update(
             curl_angle=float(rng.choice([0.0, np.pi / 2]) + rng.normal(0, 0.15)),
-            curl_amplitude=float(rng.uniform(0.03, 0.16)),
-            curl_frequency=float(rng.uniform(1.5, 5.0)),
+            curl_amplitude=float(rng.uniform(*R.CURL_AMPLITUDE)),
+            curl_frequency=float(rng.uniform(*R.CURL_FREQUENCY)),
             curl_phase=float(rng.uniform(0, 2 * np.pi)),
-            curl_quadratic=float(rng.uniform(-0.45, 0.45)),
+            curl_quadratic=float(rng.uniform(-R.CURL_BOW, R.CURL_BOW)),
         )
         if style == "cone" or rng.random() < 0.3:
-            kw["cone"] = float(rng.uniform(-1.2, 1.2))
+            kw["cone"] = float(rng.uniform(-R.CONE, R.CONE))
     if style in ("fold", "combined"):
-        folds = []
-        for _ in range(int(rng.integers(1, 4))):
-            folds.append(
-                Fold(
-                    angle=float(rng.uniform(0, np.pi)),
-                    offset=float(rng.uniform(-0.35, 0.35)),
-                    height=float(rng.uniform(-0.25, 0.25)),
-                    sharpness=float(rng.uniform(0.005, 0.04)),
-                )
+        kw["folds"] = tuple(
+            Fold(
+                angle=float(rng.uniform(0, np.pi)),
+                offset=float(rng.uniform(-R.FOLD_OFFSET, R.FOLD_OFFSET)),
+                height=float(rng.uniform(-R.FOLD_SLOPE, R.FOLD_SLOPE)),
+                sharpness=float(rng.uniform(*R.FOLD_SHARPNESS)),
             )
-        kw["folds"] = tuple(folds)
+            for _ in range(int(rng.integers(1, R.FOLDS_MAX + 1)))
+        )
+    if style == "lift" or (style == "combined" and rng.random() < R.LIFT_IN_COMBINED):
+        kw["lifts"] = tuple(_random_lift(rng, width) for _ in range(int(rng.integers(1, 3))))
     if style in ("crumple", "combined"):
-        n = int(rng.integers(3, 14))
         kw["bumps"] = tuple(
             Bump(
                 float(rng.uniform(-0.1, 1.1)),
                 float(rng.uniform(-0.1, 1.1)),
-                float(rng.uniform(0.06, 0.25)),
-                float(rng.normal(0, 0.03)),
+                float(rng.uniform(*R.BUMP_SIGMA)),
+                float(rng.normal(0, R.BUMP_HEIGHT)),
             )
-            for _ in range(n)
+            for _ in range(int(rng.integers(*R.BUMPS)))
         )
     return SurfaceParams(
         width=width,
-        tilt_x=float(rng.normal(0, 0.25)),
-        tilt_y=float(rng.normal(0, 0.25)),
-        roll=float(rng.normal(0, 0.2)),
-        distance=float(rng.uniform(1.6, 5.0)),  # nearer = stronger perspective
+        tilt_x=float(rng.normal(0, R.TILT_SIGMA)),
+        tilt_y=float(rng.normal(0, R.TILT_SIGMA)),
+        roll=float(rng.normal(0, R.ROLL_SIGMA)),
+        distance=float(rng.uniform(*R.CAMERA_DISTANCE)),  # nearer = stronger perspective
         focal=1.0,  # image-plane units; crops are chosen in the same units
         extra={"style": style},
         **kw,
     )
+
+
+def _random_lift(rng: np.random.Generator, width: float) -> Lift:
+    """An edge or corner bent up: the slope it reaches at the page edge is drawn."""
+    angle = float(rng.uniform(0, 2 * np.pi))
+    # Distance from the centre to the page edge in that direction.
+    reach = min(0.5 * width / max(abs(np.cos(angle)), 1e-6), 0.5 / max(abs(np.sin(angle)), 1e-6))
+    start = float(rng.uniform(*R.LIFT_START)) * reach
+    slope = float(rng.uniform(*R.LIFT_EDGE_SLOPE))
+    sign = -1.0 if rng.random() < R.LIFT_TOWARDS_CAMERA else 1.0  # -z is towards the camera
+    return Lift(angle=angle, start=start, strength=sign * slope / (2 * (reach - start)))
