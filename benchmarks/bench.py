@@ -14,6 +14,12 @@ from doctrpp.benchmarks.metrics import (
     map_drift,
     ms_ssim_masked,
 )
+from doctrpp.benchmarks.reference_free import (
+    black_share,
+    kept_share,
+    line_coherence,
+    line_straightness,
+)
 from doctrpp.runtime.backends import open_backend
 from doctrpp.runtime.processing import model_input, rectify_with_map
 
@@ -92,6 +98,14 @@ def accuracy(model: Path, probes: list[Probe], reference_maps: list[np.ndarray] 
     """Drift and image metrics against the reference model's maps and against ground truth."""
     inputs = [model_input(p.image, contract.INPUT_SIZE) for p in probes]
     maps = predict(model, inputs)
+    return {"per_kind": accuracy_of_maps(probes, maps, reference_maps), "maps": maps}
+
+
+def accuracy_of_maps(
+    probes: list[Probe], maps: list[np.ndarray], reference_maps: list[np.ndarray] | None
+) -> dict:
+    """Per kind: drift against reference maps (if given), accuracy against ground truth
+    (generated crops) and reference-free scores (real-photo crops)."""
     rows: dict[str, dict[str, list[float]]] = {}
 
     def add(group: str, metric: str, value: float) -> None:
@@ -99,24 +113,37 @@ def accuracy(model: Path, probes: list[Probe], reference_maps: list[np.ndarray] 
 
     for probe, bm, ref in zip(probes, maps, reference_maps or [None] * len(maps), strict=True):
         image = _as_uint8_bgr(probe.image)
+        rectified = rectify_with_map(image, bm)
         if ref is not None:
             d = map_drift(bm, ref)
             add(probe.kind, "drift_mean_px", d.mean_px)
             add(probe.kind, "drift_max_px", d.max_px)
-            ours, theirs = rectify_with_map(image, bm), rectify_with_map(image, ref)
-            add(probe.kind, "ms_ssim_m_vs_ref", ms_ssim_masked(ours, theirs))
-            add(probe.kind, "ld_m_vs_ref", local_distortion_masked(ours, theirs))
+            theirs = rectify_with_map(image, ref)
+            add(probe.kind, "ms_ssim_m_vs_ref", ms_ssim_masked(rectified, theirs))
+            add(probe.kind, "ld_m_vs_ref", local_distortion_masked(rectified, theirs))
         if probe.backward_map is not None:
             add(probe.kind, "gt_map_error_px", map_drift(bm, probe.backward_map).mean_px)
             truth = rectify_with_map(image, probe.backward_map)
-            add(probe.kind, "gt_ms_ssim_m", ms_ssim_masked(rectify_with_map(image, bm), truth))
+            add(probe.kind, "gt_ms_ssim_m", ms_ssim_masked(rectified, truth))
+        else:
+            add(probe.kind, "black_share", black_share(bm))
+            add(probe.kind, "kept_share", kept_share(bm))
+            add(probe.kind, "straightness", line_straightness(rectified))
+            add(probe.kind, "untouched_straightness", line_straightness(image))
+            add(probe.kind, "coherence", line_coherence(rectified))
+            add(probe.kind, "untouched_coherence", line_coherence(image))
     summary = {}
     for group, metrics in rows.items():
         summary[group] = {
             k: float(np.max(v)) if k.endswith("max_px") else float(np.mean(v))
             for k, v in metrics.items()
         }
-    return {"per_kind": summary, "maps": maps}
+        row = summary[group]
+        for line_metric in ("straightness", "coherence"):
+            if line_metric in row:
+                untouched = row.pop(f"untouched_{line_metric}")
+                row[f"{line_metric}_ratio"] = row[line_metric] / max(untouched, 1e-6)
+    return summary
 
 
 def describe(model: Path) -> dict:

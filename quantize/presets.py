@@ -9,7 +9,7 @@ activations is slower than the float kernel); static-body/static-all 1.2x and ~2
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 
 @dataclass(frozen=True)
@@ -26,6 +26,7 @@ class QuantPreset:
     # softmax(.)V stays float) or "float" (neither).
     attention: str = "int8"
     symmetric_activations: bool = False
+    quant_format: str = "qdq"  # qdq (Q/DQ pairs around float ops) | qoperator (QLinear* ops)
 
     def __post_init__(self) -> None:
         if self.mode not in ("static", "dynamic"):
@@ -34,6 +35,8 @@ class QuantPreset:
             raise ValueError(f"unknown calibration {self.calibration!r}")
         if self.attention not in ("int8", "scores", "float"):
             raise ValueError(f"attention must be int8, scores or float, not {self.attention!r}")
+        if self.quant_format not in ("qdq", "qoperator"):
+            raise ValueError(f"quant_format must be qdq or qoperator, not {self.quant_format!r}")
         if self.activation_type not in ("uint8", "int8"):
             raise ValueError(f"unknown activation type {self.activation_type!r}")
 
@@ -98,7 +101,29 @@ PRESETS: dict[str, QuantPreset] = {
 DEFAULT_PRESET = "static-weights"
 
 
+# Variations of a preset for recipe comparisons: "static-weights+per-tensor+percentile".
+VARIANTS: dict[str, dict] = {
+    "per-tensor": {"per_channel": False},
+    "symmetric": {"symmetric_activations": True},
+    "int8-activations": {"activation_type": "int8"},
+    "qoperator": {"quant_format": "qoperator"},
+    "percentile": {"calibration": "percentile"},
+    "entropy": {"calibration": "entropy"},
+}
+
+
 def preset_by_name(name: str) -> QuantPreset:
+    """A preset by name, optionally with variants appended: `static-weights+per-tensor`."""
+    base, *variants = name.split("+")
+    preset = _base_preset(base)
+    for variant in variants:
+        if variant not in VARIANTS:
+            raise ValueError(f"unknown variant {variant!r}; choose from {', '.join(VARIANTS)}")
+        preset = replace(preset, name=f"{preset.name}+{variant}", **VARIANTS[variant])
+    return preset
+
+
+def _base_preset(name: str) -> QuantPreset:
     try:
         return PRESETS[name]
     except KeyError:

@@ -69,6 +69,8 @@ def count_quantised_nodes(model: onnx.ModelProto, preset: QuantPreset) -> int:
             n.op_type in ("MatMulInteger", "ConvInteger", "DynamicQuantizeMatMul")
             for n in model.graph.node
         )
+    if preset.quant_format == "qoperator":
+        return sum(n.op_type in ("QLinearConv", "QLinearMatMul", "QGemm") for n in model.graph.node)
     dequantised = {n.output[0] for n in model.graph.node if n.op_type == "DequantizeLinear"}
     return sum(n.op_type in preset.op_types and n.input[0] in dequantised for n in model.graph.node)
 
@@ -179,7 +181,9 @@ def quantise(
                 prepared,
                 quantised_path,
                 CalibrationReader(calibration),
-                quant_format=QuantFormat.QDQ,
+                quant_format=QuantFormat.QDQ
+                if preset.quant_format == "qdq"
+                else QuantFormat.QOperator,
                 op_types_to_quantize=list(preset.op_types),
                 per_channel=preset.per_channel,
                 activation_type=QuantType.QUInt8

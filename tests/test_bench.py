@@ -26,6 +26,7 @@ def test_bench_report(tiny_onnx, tmp_path):
             "2",
             "--per-kind",
             "1",
+            "--no-peers",
         ]
     )
     assert code == 0
@@ -44,6 +45,9 @@ def test_bench_report(tiny_onnx, tmp_path):
     assert "| tiny_int8.onnx | onnx | int8 |" in markdown
     assert "allocator" in markdown
     assert "| untouched input | none |" in markdown
+    assert "## Real-photo crops (reference-free)" in markdown  # scikit-image's photos
+    assert 0 <= fp32["accuracy"]["real none"]["black_share"] <= 1
+    assert report["peers"] == []
     assert "- phone:" in markdown and "- CPU server:" in markdown
     assert (out / "latency.png").is_file() and (out / "drift_vs_latency.png").is_file()
 

@@ -21,7 +21,16 @@ def calibration():
     return list(generated_inputs(6))
 
 
-@pytest.mark.parametrize("name", ["static-weights", "dynamic-linear", "static-scores"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "static-weights",
+        "dynamic-linear",
+        "static-scores",
+        "static-weights+qoperator",
+        "static-weights+per-tensor+symmetric+percentile",
+    ],
+)
 def test_presets_quantise_tiny_model(
     name, tiny_onnx, calibration, tmp_path, document_photo, report_difference
 ):
@@ -33,7 +42,7 @@ def test_presets_quantise_tiny_model(
     meta = {p.key: p.value for p in model.metadata_props}
     assert meta["doctrpp.precision"] == "int8" and meta["doctrpp.input_size"] == "288"
     assert count_quantised_nodes(model, preset) == result.expected_nodes
-    if preset.keep_float:
+    if preset.keep_float and preset.quant_format == "qdq":
         head = [
             n
             for n in model.graph.node
@@ -61,6 +70,13 @@ def test_preset_validation():
     with pytest.raises(ValueError, match="unknown preset"):
         preset_by_name("nope")
     assert all(p.op_types for p in PRESETS.values())
+    varied = preset_by_name("static-weights+per-tensor+entropy")
+    assert not varied.per_channel and varied.calibration == "entropy"
+    assert varied.name == "static-weights+per-tensor+entropy"
+    with pytest.raises(ValueError, match="unknown variant"):
+        preset_by_name("static-weights+fast")
+    with pytest.raises(ValueError, match="quant_format"):
+        QuantPreset("x", "", mode="static", op_types=("Conv",), quant_format="qlinear")
 
 
 def test_quantize_cli(tiny_onnx, tmp_path, capsys):

@@ -1,11 +1,17 @@
-"""Reference-free scores for real photos: black share, kept share, text-line straightness."""
+"""Reference-free scores for real photos: black share, kept share, text-line straightness and
+coherence."""
 
 from __future__ import annotations
 
 import cv2
 import numpy as np
 
-from doctrpp.benchmarks.reference_free import black_share, kept_share, line_straightness
+from doctrpp.benchmarks.reference_free import (
+    black_share,
+    kept_share,
+    line_coherence,
+    line_straightness,
+)
 from doctrpp.training.validate import identity_map
 
 
@@ -23,6 +29,23 @@ def test_straight_lines_score_higher_than_tilted_ones():
     print(f"straightness level {level:.2f}, tilted 8 degrees {tilted:.2f}")
     assert level > 1.5 * tilted
     assert line_straightness(np.full((100, 100), 200, np.uint8)) == 0.0  # no text: no score
+
+
+def test_coherence_sees_curved_lines_that_look_straight_locally():
+    """A gentle wave (lines bend by one line pitch over the width) hardly changes the band
+    straightness but lowers the coherence."""
+    flat = _lines_page(0)
+    columns = np.arange(576, dtype=np.float32)
+    map_x = np.broadcast_to(columns, (576, 576))
+    map_y = np.arange(576, dtype=np.float32)[:, None] + 9 * np.sin(columns / 576 * 2 * np.pi)
+    wavy = cv2.remap(flat, np.ascontiguousarray(map_x), map_y.astype(np.float32), cv2.INTER_LINEAR)
+    print(
+        f"flat: coherence {line_coherence(flat):.2f}, straightness {line_straightness(flat):.2f}; "
+        f"wavy: {line_coherence(wavy):.2f}, {line_straightness(wavy):.2f}"
+    )
+    assert line_coherence(flat) > 0.9 and line_coherence(wavy) < 0.6 * line_coherence(flat)
+    assert line_straightness(wavy) > 0.7 * line_straightness(flat)
+    assert line_coherence(np.full((100, 100), 200, np.uint8)) == 0.0
 
 
 def test_identity_keeps_everything_and_adds_no_black():

@@ -2,8 +2,8 @@
 
 Photos (never trained on) and crops of the three kinds cut from them
 (`udir.photos.photo_crop_box`), rectified by the model being trained and scored with
-`benchmarks.reference_free`: text-line straightness against the untouched crop's, black
-share and kept share, per kind.
+`benchmarks.reference_free`: text-line straightness and coherence against the untouched
+crop's, black share and kept share, per kind.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from doctrpp.benchmarks.reference_free import (
     SCORE_SIZE,
     black_share,
     kept_share,
+    line_coherence,
     line_straightness,
 )
 from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
@@ -33,6 +34,7 @@ class RealItem:
     kind: str
     image: np.ndarray  # BGR uint8 crop at SCORE_SIZE x SCORE_SIZE (squashed like the input)
     straightness: float  # of the untouched crop
+    coherence: float  # of the untouched crop
 
 
 def real_photo_set(folder: Path, photos: int = 32, seed: int = 0) -> list[RealItem]:
@@ -45,7 +47,9 @@ def real_photo_set(folder: Path, photos: int = 32, seed: int = 0) -> list[RealIt
         photo = read_image(path)[:, :, :3]
         for kind, crop in crops_of_each_kind(photo, seed, index).items():
             crop = cv2.resize(crop, (SCORE_SIZE, SCORE_SIZE), cv2.INTER_AREA)
-            items.append(RealItem(path.stem, kind, crop, line_straightness(crop)))
+            items.append(
+                RealItem(path.stem, kind, crop, line_straightness(crop), line_coherence(crop))
+            )
     return items
 
 
@@ -65,8 +69,9 @@ def predict(model: torch.nn.Module, items: list[RealItem], batch: int = 8) -> li
 
 
 def score_real(items: list[RealItem], maps: list[np.ndarray]) -> dict[str, float]:
-    """Per kind: straightness of the result / of the untouched crops, black and kept share."""
-    rows: dict[str, list[tuple[float, float, float, float]]] = {}
+    """Per kind: straightness and coherence of the results / of the untouched crops, black
+    and kept share."""
+    rows: dict[str, list[tuple[float, ...]]] = {}
     for item, backward_map in zip(items, maps, strict=True):
         rectified = rectify_with_map(item.image, backward_map)
         rows.setdefault(item.kind, []).append(
@@ -75,6 +80,8 @@ def score_real(items: list[RealItem], maps: list[np.ndarray]) -> dict[str, float
                 item.straightness,
                 black_share(backward_map),
                 kept_share(backward_map),
+                line_coherence(rectified),
+                item.coherence,
             )
         )
     scores: dict[str, float] = {}
@@ -85,4 +92,5 @@ def score_real(items: list[RealItem], maps: list[np.ndarray]) -> dict[str, float
         )
         scores[f"real/black_share/{kind}"] = float(v[:, 2].mean())
         scores[f"real/kept_share/{kind}"] = float(v[:, 3].mean())
+        scores[f"real/coherence_ratio/{kind}"] = float(v[:, 4].mean() / max(v[:, 5].mean(), 1e-6))
     return scores
