@@ -314,3 +314,12 @@ def test_data_workers_cpu_time_is_counted():
     busy = "import time\nt = time.process_time()\nwhile time.process_time() - t < 0.3: pass"
     subprocess.run([sys.executable, "-c", busy], check=True)
     assert children_cpu_seconds() - before >= 0.25
+
+
+def test_throughput_tool_measures_a_step():
+    """`python -m doctrpp.training.throughput`: CPU seconds per step, ratios to the first."""
+    from doctrpp.training.throughput import measure
+
+    rows = measure(["tiny"], ["fp32", "bf16"], batch=1, rounds=1)
+    assert [r["variant"] for r in rows] == ["fp32", "bf16"]
+    assert all(r["cpu_s_per_step"] > 0 for r in rows) and rows[0]["vs_first"] == 1.0

