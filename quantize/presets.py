@@ -90,6 +90,16 @@ PRESETS: dict[str, QuantPreset] = {
             attention="scores",
         ),
         QuantPreset(
+            "static-encoder-float",
+            "static QDQ int8 weight MatMul/Gemm and the down convolutions; the convolutional "
+            "feature encoder (fnet), attention matmuls and head float (the trained tiny "
+            "default's sensitivity: fnet causes most of the drift)",
+            mode="static",
+            op_types=("Conv", "MatMul", "Gemm"),
+            keep_float=(*HEAD, "/fnet/"),
+            attention="float",
+        ),
+        QuantPreset(
             "static-convs",
             "static QDQ int8 convolutions only (backbone, down layers); head float",
             mode="static",
