@@ -79,6 +79,7 @@ def pipeline_report(
     threads: int = 2,
     megapixels: tuple[float, float] = (MEGAPIXELS_THROUGHPUT, MEGAPIXELS_HUGE),
 ) -> dict:
+    model = Path(model).resolve()  # rectify runs from a temporary folder
     report: dict = {"model": str(model), "threads": threads, "throughput": [], "memory": []}
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp) / "photos12"

@@ -312,6 +312,16 @@ def recommendations(report: dict) -> list[str]:
     ]
     if rejected:
         lines.append(f"not recommended (drift over target): {', '.join(rejected)}")
+    not_faster = [
+        f"{m['name']} ({m['latency_ratio']:.2f}x)"
+        for m in report["models"]
+        if m["precision"] == "int8" and meets_drift(m) and m.get("latency_ratio", 0) > 0.67
+    ]
+    if not_faster:
+        lines.append(
+            "faithful but not fast enough to pay for int8 (over 0.67x the reference at 2 "
+            f"threads): {', '.join(not_faster)}"
+        )
     return lines
 
 

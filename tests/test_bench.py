@@ -56,12 +56,16 @@ def test_bench_errors(tmp_path):
     assert main(["bench", "--models", str(tmp_path / "absent.onnx"), "--out", str(tmp_path)]) == 2
 
 
-def test_whole_pipeline_section(tiny_onnx, tmp_path):
-    """bench --pipeline: images/s at each --jobs and peak RSS on one big photo (small here)."""
+def test_whole_pipeline_section(tiny_onnx, tmp_path, monkeypatch):
+    """bench --pipeline: images/s at each --jobs and peak RSS on one big photo (small here);
+    a model path relative to the caller's folder works (rectify runs elsewhere)."""
+    from pathlib import Path
+
     from doctrpp.benchmarks.pipeline import big_photo, pipeline_markdown, pipeline_report
 
+    monkeypatch.chdir(tiny_onnx.parent)
     report = pipeline_report(
-        tiny_onnx, None, count=2, jobs=(1, 2), threads=1, megapixels=(0.3, 1.0)
+        Path(tiny_onnx.name), None, count=2, jobs=(1, 2), threads=1, megapixels=(0.3, 1.0)
     )
     assert [row["jobs"] for row in report["throughput"]] == [1, 2]
     assert all(row["images_per_s"] > 0 and row["peak_rss_mb"] > 10 for row in report["throughput"])

