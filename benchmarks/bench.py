@@ -14,12 +14,7 @@ from doctrpp.benchmarks.metrics import (
     map_drift,
     ms_ssim_masked,
 )
-from doctrpp.benchmarks.reference_free import (
-    black_share,
-    kept_share,
-    line_coherence,
-    line_straightness,
-)
+from doctrpp.benchmarks.reference_free import line_scores, rectification_scores, summarise
 from doctrpp.runtime.backends import open_backend
 from doctrpp.runtime.processing import model_input, rectify_with_map
 
@@ -107,6 +102,7 @@ def accuracy_of_maps(
     """Per kind: drift against reference maps (if given), accuracy against ground truth
     (generated crops) and reference-free scores (real-photo crops)."""
     rows: dict[str, dict[str, list[float]]] = {}
+    real_rows: dict[str, list[dict[str, float]]] = {}
 
     def add(group: str, metric: str, value: float) -> None:
         rows.setdefault(group, {}).setdefault(metric, []).append(value)
@@ -126,23 +122,17 @@ def accuracy_of_maps(
             truth = rectify_with_map(image, probe.backward_map)
             add(probe.kind, "gt_ms_ssim_m", ms_ssim_masked(rectified, truth))
         else:
-            add(probe.kind, "black_share", black_share(bm))
-            add(probe.kind, "kept_share", kept_share(bm))
-            add(probe.kind, "straightness", line_straightness(rectified))
-            add(probe.kind, "untouched_straightness", line_straightness(image))
-            add(probe.kind, "coherence", line_coherence(rectified))
-            add(probe.kind, "untouched_coherence", line_coherence(image))
-    summary = {}
+            real_rows.setdefault(probe.kind, []).append(
+                rectification_scores(rectified, bm, line_scores(image))
+            )
+    summary: dict[str, dict[str, float]] = {}
     for group, metrics in rows.items():
         summary[group] = {
             k: float(np.max(v)) if k.endswith("max_px") else float(np.mean(v))
             for k, v in metrics.items()
         }
-        row = summary[group]
-        for line_metric in ("straightness", "coherence"):
-            if line_metric in row:
-                untouched = row.pop(f"untouched_{line_metric}")
-                row[f"{line_metric}_ratio"] = row[line_metric] / max(untouched, 1e-6)
+    for group, group_rows in real_rows.items():
+        summary.setdefault(group, {}).update(summarise(group_rows))
     return summary
 
 

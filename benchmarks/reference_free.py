@@ -81,3 +81,32 @@ def line_coherence(image: np.ndarray) -> float:
     if not bands:
         return 0.0
     return _profile_contrast(ink.mean(axis=1)) / max(float(np.mean(bands)), 1e-6)
+
+
+LINE_SCORES = {"straightness": line_straightness, "coherence": line_coherence}
+
+
+def line_scores(image: np.ndarray) -> dict[str, float]:
+    return {name: score(image) for name, score in LINE_SCORES.items()}
+
+
+def rectification_scores(
+    rectified: np.ndarray, backward_map: np.ndarray, untouched_lines: dict[str, float]
+) -> dict[str, float]:
+    """One rectified crop: black and kept share, and each line score beside the untouched
+    crop's (`line_scores` of it, computed once by the caller)."""
+    scores = {"black_share": black_share(backward_map), "kept_share": kept_share(backward_map)}
+    for name, value in line_scores(rectified).items():
+        scores[name] = value
+        scores[f"untouched_{name}"] = untouched_lines[name]
+    return scores
+
+
+def summarise(rows: list[dict[str, float]]) -> dict[str, float]:
+    """Means over crops; each line score as a ratio of means, result over untouched crop."""
+    means = {key: float(np.mean([row[key] for row in rows])) for key in rows[0]}
+    for name in LINE_SCORES:
+        if name in means:
+            untouched = means.pop(f"untouched_{name}")
+            means[f"{name}_ratio"] = means.pop(name) / max(untouched, 1e-6)
+    return means

@@ -18,10 +18,9 @@ import torch
 from doctrpp import contract
 from doctrpp.benchmarks.reference_free import (
     SCORE_SIZE,
-    black_share,
-    kept_share,
-    line_coherence,
-    line_straightness,
+    line_scores,
+    rectification_scores,
+    summarise,
 )
 from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
 from doctrpp.runtime.processing import model_input, rectify_with_map
@@ -33,8 +32,7 @@ class RealItem:
     name: str
     kind: str
     image: np.ndarray  # BGR uint8 crop at SCORE_SIZE x SCORE_SIZE (squashed like the input)
-    straightness: float  # of the untouched crop
-    coherence: float  # of the untouched crop
+    lines: dict[str, float]  # line scores of the untouched crop
 
 
 def real_photo_set(folder: Path, photos: int = 32, seed: int = 0) -> list[RealItem]:
@@ -47,9 +45,7 @@ def real_photo_set(folder: Path, photos: int = 32, seed: int = 0) -> list[RealIt
         photo = read_image(path)[:, :, :3]
         for kind, crop in crops_of_each_kind(photo, seed, index).items():
             crop = cv2.resize(crop, (SCORE_SIZE, SCORE_SIZE), cv2.INTER_AREA)
-            items.append(
-                RealItem(path.stem, kind, crop, line_straightness(crop), line_coherence(crop))
-            )
+            items.append(RealItem(path.stem, kind, crop, line_scores(crop)))
     return items
 
 
@@ -71,26 +67,14 @@ def predict(model: torch.nn.Module, items: list[RealItem], batch: int = 8) -> li
 def score_real(items: list[RealItem], maps: list[np.ndarray]) -> dict[str, float]:
     """Per kind: straightness and coherence of the results / of the untouched crops, black
     and kept share."""
-    rows: dict[str, list[tuple[float, ...]]] = {}
+    rows: dict[str, list[dict[str, float]]] = {}
     for item, backward_map in zip(items, maps, strict=True):
         rectified = rectify_with_map(item.image, backward_map)
         rows.setdefault(item.kind, []).append(
-            (
-                line_straightness(rectified),
-                item.straightness,
-                black_share(backward_map),
-                kept_share(backward_map),
-                line_coherence(rectified),
-                item.coherence,
-            )
+            rectification_scores(rectified, backward_map, item.lines)
         )
-    scores: dict[str, float] = {}
-    for kind, values in rows.items():
-        v = np.array(values)
-        scores[f"real/straightness_ratio/{kind}"] = float(
-            v[:, 0].mean() / max(v[:, 1].mean(), 1e-6)
-        )
-        scores[f"real/black_share/{kind}"] = float(v[:, 2].mean())
-        scores[f"real/kept_share/{kind}"] = float(v[:, 3].mean())
-        scores[f"real/coherence_ratio/{kind}"] = float(v[:, 4].mean() / max(v[:, 5].mean(), 1e-6))
-    return scores
+    return {
+        f"real/{metric}/{kind}": value
+        for kind, kind_rows in rows.items()
+        for metric, value in summarise(kind_rows).items()
+    }
