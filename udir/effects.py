@@ -29,7 +29,7 @@ class Look:
 
 
 def random_look(rng: np.random.Generator) -> Look:
-    light = np.array([rng.normal(0, 0.5), rng.normal(0, 0.5), -1.0])
+    light = np.array([*rng.normal(0, ranges.LIGHT_OBLIQUE_SIGMA, 2), -1.0])
     light /= np.linalg.norm(light)
     shadow: tuple[float, ...] = ()
     if rng.random() < 0.35:
@@ -66,7 +66,7 @@ def random_look(rng: np.random.Generator) -> Look:
             rng.uniform(0.8, 2.5) if rng.random() < ranges.EDGE_DEFOCUS_SHARE else 0.0
         ),
         light=tuple(float(c) for c in light),
-        ambient=float(rng.uniform(0.45, 0.85)),
+        ambient=float(rng.uniform(*ranges.AMBIENT)),
         gradient=(
             float(rng.uniform(0, 2 * np.pi)),
             float(rng.uniform(0.7, 1.0)),
@@ -75,9 +75,11 @@ def random_look(rng: np.random.Generator) -> Look:
         shadow=tuple(float(c) for c in shadow),
         highlight=tuple(float(c) for c in highlight),
         colour_cast=tuple(float(c) for c in rng.uniform(*ranges.WHITE_BALANCE, 3)),
-        blur_sigma=float(rng.uniform(0.3, 1.4) if rng.random() < 0.45 else 0.0),
+        blur_sigma=float(
+            rng.uniform(*ranges.BLUR_SIGMA) if rng.random() < ranges.BLUR_SHARE else 0.0
+        ),
         motion=tuple(float(c) for c in motion),
-        noise_sigma=float(rng.uniform(0.5, 7.0)),
+        noise_sigma=float(rng.uniform(*ranges.NOISE_SIGMA)),
         jpeg_quality=int(rng.integers(35, 96)) if rng.random() < 0.6 else 0,
     )
 

@@ -39,33 +39,51 @@ PAGE_LONG_SIDE = 1024  # px of the flat page texture
 
 # -- page geometry and camera (surface.py) -----------------------------------------------------
 # Lengths in page heights; bends keep the paper's length (text foreshortens where it turns).
+# Session 5: real photos (docunet_dev) show more folding and crumpling than session 4's
+# crops did (a sheet side by side): folds are more frequent and steeper, and crumpled pages
+# get many small creases, not only smooth bumps.
 SURFACE_STYLES = {  # relative weights
-    "perspective": 0.08,
-    "curl": 0.2,
+    "perspective": 0.05,
+    "curl": 0.17,
     "cone": 0.1,
-    "fold": 0.16,
+    "fold": 0.2,
     "lift": 0.12,
-    "crumple": 0.11,
-    "combined": 0.23,
+    "crumple": 0.16,
+    "combined": 0.2,
 }
-CURL_AMPLITUDE = (0.03, 0.2)  # sine part of a curl
+CURL_AMPLITUDE = (0.05, 0.25)  # sine part of a curl
 CURL_FREQUENCY = (1.5, 5.0)  # radians per page height
 CURL_BOW = 0.45  # |quadratic part| of a curl (a cylinder-like bow)
 CONE = 1.2  # |growth| of a curl along its axis
-FOLDS_MAX = 3
+FOLDS_MAX = 4
 FOLD_OFFSET = 0.35  # |crease distance| from the page centre
-FOLD_SLOPE = 0.35  # |height gained per unit distance| from the crease
-FOLD_SHARPNESS = (0.005, 0.04)  # width of the crease's rounding
+FOLD_SLOPE = 0.8  # |height gained per unit distance| from the crease
+FOLD_ALONG_AXES = 0.6  # share of folds parallel to a page side (folded in halves, quarters)
+FOLD_SHARPNESS = (0.008, 0.04)  # width of the crease's rounding
 LIFT_IN_COMBINED = 0.35  # share of combined surfaces that also lift an edge or corner
 LIFT_START = (0.2, 0.8)  # where the lift starts / centre-to-edge distance
 LIFT_EDGE_SLOPE = (0.4, 1.5)  # slope reached at the page edge
 LIFT_TOWARDS_CAMERA = 0.85
 BUMPS = (3, 14)  # crumpling: number of bumps (upper bound exclusive)
 BUMP_SIGMA = (0.06, 0.25)
-BUMP_HEIGHT = 0.03  # normal sigma
-TILT_SIGMA = 0.25  # radians, camera tilt about x and y
+BUMP_HEIGHT = 0.06  # normal sigma
+CREASES = (4, 14)  # crumpling: small creases at random angles (upper bound exclusive)
+CREASE_SLOPE = (0.1, 0.4)  # |height gained per unit distance| from a small crease
+CREASE_OFFSET = 0.45  # |crease distance| from the page centre
+CREASE_SHARPNESS = (0.01, 0.03)
+# Session 5 (a sheet of complete crops beside docunet_dev): people photograph a page held
+# square to the phone, so most real pages are upright (roll within a few degrees), seen
+# nearly from the front, and fill the frame; our crops showed rotated trapezoids filling
+# half of it. Most cameras are now "aligned"; the rest keep the strong handheld angles.
+ALIGNED_CAMERA_SHARE = 0.65
+ALIGNED_TILT_SIGMA = 0.12  # radians
+ALIGNED_ROLL_SIGMA = 0.04  # radians
+ALIGNED_CAMERA_DISTANCE = (2.5, 6.0)
+TILT_SIGMA = 0.3  # radians, camera tilt about x and y (handheld at an angle)
 ROLL_SIGMA = 0.15  # radians, camera roll
 CAMERA_DISTANCE = (1.6, 5.0)  # nearer = stronger perspective
+MIN_AREA_SCALE = 0.3  # redraw a surface whose image shrinks a page part below this (local
+#                       area / median): folded over or nearly edge-on to the camera
 
 # -- paper and print (paper.py) -------------------------------------------------------------
 PAPER_WHITE_SHARE = 0.72  # the rest: cream/recycled (half) or light colours
@@ -88,3 +106,10 @@ FINGERS_SHARE = 0.15  # fingers holding the page edge (complete and partial crop
 VIGNETTE = (0.0, 0.35)  # darkening at the corners
 EDGE_DEFOCUS_SHARE = 0.3  # blur growing towards the crop edges
 WHITE_BALANCE = (0.9, 1.08)  # per-channel gain
+# Session 5: the real photos are mostly sharp with little noise; half our crops were
+# blurred past legibility at 288 px.
+BLUR_SHARE = 0.25  # defocus over the whole crop
+BLUR_SIGMA = (0.3, 1.0)  # px at 288
+NOISE_SIGMA = (0.5, 4.5)  # grey levels
+LIGHT_OBLIQUE_SIGMA = 0.8  # sideways part of the light direction (1 = 45 degrees)
+AMBIENT = (0.25, 0.8)  # light share that does not depend on the page's slope (shading)

@@ -12,7 +12,7 @@ from . import ranges
 from .documents import render_page
 from .effects import random_look
 from .scene import KINDS, Scene
-from .surface import invert, project, random_surface
+from .surface import folds_over, invert, project, random_surface
 
 
 class CropError(RuntimeError):
@@ -95,6 +95,8 @@ def make_scene(seed: int, kind: str, page_reuse: int = 1) -> Scene:
     page = page_for(seed // max(page_reuse, 1))
     for _ in range(20):
         surface = random_surface(rng, width=page.shape[1] / page.shape[0])
+        if folds_over(surface):
+            continue
         try:
             crop = choose_crop(rng, surface, kind)
         except CropError:

@@ -231,16 +231,13 @@ def random_surface(
         )
         if style == "cone" or rng.random() < 0.3:
             kw["cone"] = float(rng.uniform(-R.CONE, R.CONE))
+    folds: list[Fold] = []
     if style in ("fold", "combined"):
-        kw["folds"] = tuple(
-            Fold(
-                angle=float(rng.uniform(0, np.pi)),
-                offset=float(rng.uniform(-R.FOLD_OFFSET, R.FOLD_OFFSET)),
-                height=float(rng.uniform(-R.FOLD_SLOPE, R.FOLD_SLOPE)),
-                sharpness=float(rng.uniform(*R.FOLD_SHARPNESS)),
-            )
-            for _ in range(int(rng.integers(1, R.FOLDS_MAX + 1)))
-        )
+        folds += [_random_fold(rng) for _ in range(int(rng.integers(1, R.FOLDS_MAX + 1)))]
+    if style == "crumple" or (style == "combined" and rng.random() < 0.5):
+        folds += [_random_crease(rng) for _ in range(int(rng.integers(*R.CREASES)))]
+    if folds:
+        kw["folds"] = tuple(folds)
     if style == "lift" or (style == "combined" and rng.random() < R.LIFT_IN_COMBINED):
         kw["lifts"] = tuple(_random_lift(rng, width) for _ in range(int(rng.integers(1, 3))))
     if style in ("crumple", "combined"):
@@ -253,16 +250,60 @@ def random_surface(
             )
             for _ in range(int(rng.integers(*R.BUMPS)))
         )
+    aligned = bool(rng.random() < R.ALIGNED_CAMERA_SHARE)
+    tilt, roll, distance = (
+        (R.ALIGNED_TILT_SIGMA, R.ALIGNED_ROLL_SIGMA, R.ALIGNED_CAMERA_DISTANCE)
+        if aligned
+        else (R.TILT_SIGMA, R.ROLL_SIGMA, R.CAMERA_DISTANCE)
+    )
     return SurfaceParams(
         width=width,
-        tilt_x=float(rng.normal(0, R.TILT_SIGMA)),
-        tilt_y=float(rng.normal(0, R.TILT_SIGMA)),
-        roll=float(rng.normal(0, R.ROLL_SIGMA)),
-        distance=float(rng.uniform(*R.CAMERA_DISTANCE)),  # nearer = stronger perspective
+        tilt_x=float(rng.normal(0, tilt)),
+        tilt_y=float(rng.normal(0, tilt)),
+        roll=float(rng.normal(0, roll)),
+        distance=float(rng.uniform(*distance)),  # nearer = stronger perspective
         focal=1.0,  # image-plane units; crops are chosen in the same units
-        extra={"style": style},
+        extra={"style": style, "camera": "aligned" if aligned else "handheld"},
         **kw,
     )
+
+
+def _random_fold(rng: np.random.Generator) -> Fold:
+    """A fold across the page; most run parallel to a side, as when paper is folded."""
+    if rng.random() < R.FOLD_ALONG_AXES:
+        angle = float(rng.choice([0.0, np.pi / 2]) + rng.normal(0, 0.05))
+    else:
+        angle = float(rng.uniform(0, np.pi))
+    return Fold(
+        angle=angle,
+        offset=float(rng.uniform(-R.FOLD_OFFSET, R.FOLD_OFFSET)),
+        height=float(rng.uniform(-R.FOLD_SLOPE, R.FOLD_SLOPE)),
+        sharpness=float(rng.uniform(*R.FOLD_SHARPNESS)),
+    )
+
+
+def _random_crease(rng: np.random.Generator) -> Fold:
+    """A small crease of crumpled paper: any angle, anywhere, shallow and sharp."""
+    return Fold(
+        angle=float(rng.uniform(0, np.pi)),
+        offset=float(rng.uniform(-R.CREASE_OFFSET, R.CREASE_OFFSET)),
+        height=float(rng.choice([-1.0, 1.0]) * rng.uniform(*R.CREASE_SLOPE)),
+        sharpness=float(rng.uniform(*R.CREASE_SHARPNESS)),
+    )
+
+
+def folds_over(p: SurfaceParams, grid: int = 41) -> bool:
+    """Whether the camera sees part of the page folded over another part, or turned almost
+    edge-on (local image area below `MIN_AREA_SCALE` of the median): the image of the page
+    would not be one-to-one, or the crop would show that part too thinly to rectify."""
+    u, v = np.meshgrid(np.linspace(0, 1, grid), np.linspace(0, 1, grid))
+    eps = 1e-4
+    x, y = project(p, u, v)
+    xu, yu = project(p, u + eps, v)
+    xv, yv = project(p, u, v + eps)
+    area = (xu - x) * (yv - y) - (xv - x) * (yu - y)
+    area = area * np.sign(np.median(area))
+    return bool(area.min() < R.MIN_AREA_SCALE * np.median(area))
 
 
 def _random_lift(rng: np.random.Generator, width: float) -> Lift:
