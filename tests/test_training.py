@@ -323,3 +323,33 @@ def test_throughput_tool_measures_a_step():
     rows = measure(["tiny"], ["fp32", "bf16"], batch=1, rounds=1)
     assert [r["variant"] for r in rows] == ["fp32", "bf16"]
     assert all(r["cpu_s_per_step"] > 0 for r in rows) and rows[0]["vs_first"] == 1.0
+
+
+def test_sample_reuse_shows_each_crop_k_times_from_the_cache(monkeypatch):
+    """--sample-reuse K: windows of distinct crops, each shown K times (fresh jitter),
+    generated once per data worker; K = 1 is the plain stream."""
+    from doctrpp.training import data
+
+    assert [data.generated_index(p, 2, 4) for p in range(12)] == [
+        0, 1, 2, 3, 0, 1, 2, 3, 8, 9, 10, 11,
+    ]  # fmt: skip
+    assert [data.generated_index(p, 1, 4) for p in range(6)] == list(range(6))
+    assert data.reuse_window(8, 1) == 256 and data.reuse_window(12, 15, 2) == 360
+    calls = []
+    real_generate = data.generate
+    monkeypatch.setattr(data, "generate", lambda *a, **k: calls.append(a) or real_generate(*a, **k))
+    reused = GeneratedCrops(sample_reuse=2, window=2, page_reuse=4)
+    first, target = reused[0]
+    repeat, repeat_target = reused[2]
+    assert len(calls) == 1  # the repeat came from the cache
+    assert torch.equal(target, repeat_target) and not torch.equal(first, repeat)
+    plain_image, plain_target = GeneratedCrops(page_reuse=4)[0]
+    assert torch.equal(plain_target, target) and torch.equal(plain_image, first)
+    assert reused.kind_of(data.generated_index(2, 2, 2)) == "complete"
+
+
+def test_sample_reuse_counts_generated_crops(tmp_path):
+    state = train(
+        quick_settings(tmp_path / "r", steps=4, validate_every=4, kind="complete", sample_reuse=2)
+    )
+    assert state["samples_seen"] == 8 and state["generated_samples"] == 4

