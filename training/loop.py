@@ -192,6 +192,8 @@ def train(s: TrainSettings) -> dict:
         model.load_state_dict({k: v.float() for k, v in weights["model"].items()})
         state.update(carried_state(weights))
         state["schedule_start"] = state["step"]  # a fresh optimiser and lr cycle from here
+    # Distinct crops trained on (runs before sample reuse existed showed each once).
+    state.setdefault("generated_samples", state["samples_seen"])
     net = model
     if env.world > 1:
         net = torch.nn.parallel.DistributedDataParallel(
@@ -276,7 +278,7 @@ def train(s: TrainSettings) -> dict:
         record = {
             "step": state["step"],
             "samples_seen": state["samples_seen"],
-            "generated_samples": int(state.get("generated_samples", state["samples_seen"])),
+            "generated_samples": int(state["generated_samples"]),
             "cpu_hours": state["cpu_seconds"] / 3600,
             "data_cpu_hours": state.get("data_cpu_seconds", 0.0) / 3600,
             **scores,
@@ -310,10 +312,7 @@ def train(s: TrainSettings) -> dict:
         schedule.step()
         state["step"] += 1
         state["samples_seen"] += per_step
-        # Distinct crops trained on (runs before sample reuse existed showed each once).
-        state["generated_samples"] = state.get(
-            "generated_samples", state["samples_seen"] - per_step
-        ) + per_step / (1 if s.data_folder else s.sample_reuse)
+        state["generated_samples"] += per_step / (1 if s.data_folder else s.sample_reuse)
         if env.main:
             now = time.time()
             log.step(

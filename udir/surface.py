@@ -163,6 +163,15 @@ def surface_normals_z(p: SurfaceParams, u: np.ndarray, v: np.ndarray, eps: float
     return np.where(n[..., 2:3] > 0, -n, n)  # facing the camera (towards -Z)
 
 
+def image_jacobian(p: SurfaceParams, u: np.ndarray, v: np.ndarray, eps: float = 1e-4):
+    """Image position (x, y) of page (u, v) and the forward map's Jacobian there, by forward
+    differences: x, y, dx/du, dx/dv, dy/du, dy/dv."""
+    x, y = project(p, u, v)
+    xu, yu = project(p, u + eps, v)
+    xv, yv = project(p, u, v + eps)
+    return x, y, (xu - x) / eps, (xv - x) / eps, (yu - y) / eps, (yv - y) / eps
+
+
 def invert(
     p: SurfaceParams, x: np.ndarray, y: np.ndarray, iterations: int = 12
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -187,13 +196,8 @@ def invert(
     den = h[2, 0] * x + h[2, 1] * y + h[2, 2]
     u = (h[0, 0] * x + h[0, 1] * y + h[0, 2]) / den
     v = (h[1, 0] * x + h[1, 1] * y + h[1, 2]) / den
-    eps = 1e-4
     for _ in range(iterations):
-        fx, fy = project(p, u, v)
-        fxu, fyu = project(p, u + eps, v)
-        fxv, fyv = project(p, u, v + eps)
-        a, b = (fxu - fx) / eps, (fxv - fx) / eps
-        c, d = (fyu - fy) / eps, (fyv - fy) / eps
+        fx, fy, a, b, c, d = image_jacobian(p, u, v)
         det = a * d - b * c
         det = np.where(np.abs(det) < 1e-9, 1e-9, det)
         ex, ey = x - fx, y - fy
@@ -297,11 +301,8 @@ def folds_over(p: SurfaceParams, grid: int = 41) -> bool:
     edge-on (local image area below `MIN_AREA_SCALE` of the median): the image of the page
     would not be one-to-one, or the crop would show that part too thinly to rectify."""
     u, v = np.meshgrid(np.linspace(0, 1, grid), np.linspace(0, 1, grid))
-    eps = 1e-4
-    x, y = project(p, u, v)
-    xu, yu = project(p, u + eps, v)
-    xv, yv = project(p, u, v + eps)
-    area = (xu - x) * (yv - y) - (xv - x) * (yu - y)
+    _, _, a, b, c, d = image_jacobian(p, u, v)
+    area = a * d - b * c  # local image area per unit page area
     area = area * np.sign(np.median(area))
     return bool(area.min() < R.MIN_AREA_SCALE * np.median(area))
 
