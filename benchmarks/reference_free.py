@@ -24,6 +24,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from .map_shape import nonprojective_px
+
 SCORE_SIZE = 576  # images are scored at this square size
 BANDS = 8  # vertical bands for projection profiles
 SMOOTHING = np.array([0.25, 0.5, 0.25])  # of the row profile (JPEG noise, antialiasing)
@@ -93,9 +95,14 @@ def line_scores(image: np.ndarray) -> dict[str, float]:
 def rectification_scores(
     rectified: np.ndarray, backward_map: np.ndarray, untouched_lines: dict[str, float]
 ) -> dict[str, float]:
-    """One rectified crop: black and kept share, and each line score beside the untouched
+    """One rectified crop: black and kept share, the map's non-projective part (px of its
+    grid: how much it does beyond a perspective), and each line score beside the untouched
     crop's (`line_scores` of it, computed once by the caller)."""
-    scores = {"black_share": black_share(backward_map), "kept_share": kept_share(backward_map)}
+    scores = {
+        "black_share": black_share(backward_map),
+        "kept_share": kept_share(backward_map),
+        "nonprojective_px": nonprojective_px(backward_map),
+    }
     for name, value in line_scores(rectified).items():
         scores[name] = value
         scores[f"untouched_{name}"] = untouched_lines[name]

@@ -145,10 +145,13 @@ def reference_free_markdown(report: dict) -> list[str]:
         "straightness (local tilt) of the result / of the untouched crop (1 = unchanged, "
         "higher = better; blind to content cut away and to stretching along lines), "
         "share of the output sampled from outside the photo (black) and share of the photo "
-        "kept. The untouched crop scores 1 / 1 / 0 / 1.",
+        "kept; bending: the map's mean non-projective part in px of its 288 grid (what it "
+        "does beyond a perspective; curled pages need some). The untouched crop scores "
+        "1 / 1 / 0 / 1 / 0.",
         "",
-        "| model | kind | coherence ratio | straightness ratio | black share | kept share |",
-        "|---|---|---|---|---|---|",
+        "| model | kind | coherence ratio | straightness ratio | black share | kept share "
+        "| bending px |",
+        "|---|---|---|---|---|---|---|",
     ]
     for m in rows:
         for kind in REAL_KINDS:
@@ -157,7 +160,7 @@ def reference_free_markdown(report: dict) -> list[str]:
                 lines.append(
                     f"| {m['name']} | {kind} | {_fmt(row.get('coherence_ratio'))} | "
                     f"{_fmt(row['straightness_ratio'])} | {_fmt(row['black_share'])} | "
-                    f"{_fmt(row['kept_share'])} |"
+                    f"{_fmt(row['kept_share'])} | {_fmt(row.get('nonprojective_px'))} |"
                 )
     return lines
 

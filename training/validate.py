@@ -8,6 +8,7 @@ import numpy as np
 import torch
 
 from doctrpp import contract
+from doctrpp.benchmarks.map_shape import nonprojective_recovery
 from doctrpp.benchmarks.metrics import map_drift, ms_ssim_masked
 from doctrpp.contract import identity_map
 from doctrpp.runtime.processing import rectify_with_map
@@ -32,19 +33,24 @@ def validation_set(count: int = 48) -> list[ValidationItem]:
 
 
 def score_maps(items: list[ValidationItem], predicted: list[np.ndarray]) -> dict[str, float]:
-    """Mean map error (px of the 288 grid) and MS-SSIM-M per kind and overall."""
-    per_kind: dict[str, list[tuple[float, float]]] = {}
+    """Per kind and overall: mean map error (px of the 288 grid), MS-SSIM-M, and how much of
+    the maps' non-projective part (curls, folds) was recovered (1 - its error / its size,
+    ratio of means; 0 = a model that only straightens perspective)."""
+    per_kind: dict[str, list[tuple[float, float, float, float]]] = {}
     for item, bm in zip(items, predicted, strict=True):
         error = map_drift(bm, item.backward_map).mean_px
         quality = ms_ssim_masked(
             rectify_with_map(item.image, bm), rectify_with_map(item.image, item.backward_map)
         )
-        per_kind.setdefault(item.kind, []).append((error, quality))
+        shape = nonprojective_recovery(bm, item.backward_map)
+        per_kind.setdefault(item.kind, []).append((error, quality, shape.error_px, shape.truth_px))
     scores: dict[str, float] = {}
     everything = [v for values in per_kind.values() for v in values]
     for kind, values in [*per_kind.items(), ("all", everything)]:
-        scores[f"map_error_px/{kind}"] = float(np.mean([v[0] for v in values]))
-        scores[f"ms_ssim_m/{kind}"] = float(np.mean([v[1] for v in values]))
+        mean = np.mean(values, axis=0)
+        scores[f"map_error_px/{kind}"] = float(mean[0])
+        scores[f"ms_ssim_m/{kind}"] = float(mean[1])
+        scores[f"nonprojective_recovered/{kind}"] = float(1.0 - mean[2] / max(mean[3], 1e-9))
     return scores
 
 
