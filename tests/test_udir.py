@@ -61,12 +61,13 @@ def test_gt_map_inverts_the_render_geometry(seed, report_difference):
     error = np.hypot(
         (got_u - target_u) * (SIZE - 1) / (u1 - u0), (got_v - target_v) * (SIZE - 1) / (v1 - v0)
     )[inside]
-    report_difference(f"seed {seed} {scene.kind}: geometric self-consistency", error.max(), 0.6)
-    # The map is exact; the crop is rendered through a coarser inversion grid
-    # (scene.INVERSION_GRID), which rounds the kink of a sharp crease by up to ~0.5 px in
-    # a thin band along it (measured: <= 4% of the pixels on creased pages).
-    assert np.quantile(error, 0.95) < 0.1
-    assert error.max() < 0.6
+    report_difference(f"seed {seed} {scene.kind}: geometric self-consistency", error.max(), 0.2)
+    # The map is exact and the crop's page coordinates are refined at full resolution
+    # (scene.REFINE_ITERATIONS); what is left is this check's own bilinear sampling of u, v
+    # across the kink of a sharp crease (measured over seeds 200-259: q95 <= 0.015 px,
+    # max 0.14 px; without the refinement 0.08 and 0.48).
+    assert np.quantile(error, 0.95) < 0.05
+    assert error.max() < 0.2
 
 
 @pytest.mark.parametrize("seed", SEEDS)

@@ -173,14 +173,21 @@ def image_jacobian(p: SurfaceParams, u: np.ndarray, v: np.ndarray, eps: float = 
 
 
 def invert(
-    p: SurfaceParams, x: np.ndarray, y: np.ndarray, iterations: int = 12
+    p: SurfaceParams,
+    x: np.ndarray,
+    y: np.ndarray,
+    iterations: int = 12,
+    start: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Image (x, y) -> page (u, v) by Newton's method on the forward map.
 
-    Starts from the inverse of the undeformed page's homography; values outside the
-    unit square mean "not on the page". The surfaces drawn by `random_surface` are
-    kept gentle enough for the map to be one-to-one.
+    Starts from `start` (a close guess, e.g. a coarser inversion upsampled) or else from
+    the inverse of the undeformed page's homography; values outside the unit square mean
+    "not on the page". The surfaces drawn by `random_surface` are kept gentle enough for
+    the map to be one-to-one.
     """
+    if start is not None:
+        return _newton(p, x, y, *start, iterations)
     flat = SurfaceParams(
         width=p.width,
         tilt_x=p.tilt_x,
@@ -196,6 +203,12 @@ def invert(
     den = h[2, 0] * x + h[2, 1] * y + h[2, 2]
     u = (h[0, 0] * x + h[0, 1] * y + h[0, 2]) / den
     v = (h[1, 0] * x + h[1, 1] * y + h[1, 2]) / den
+    return _newton(p, x, y, u, v, iterations)
+
+
+def _newton(
+    p: SurfaceParams, x: np.ndarray, y: np.ndarray, u: np.ndarray, v: np.ndarray, iterations: int
+) -> tuple[np.ndarray, np.ndarray]:
     for _ in range(iterations):
         fx, fy, a, b, c, d = image_jacobian(p, u, v)
         det = a * d - b * c
