@@ -6,8 +6,10 @@ import csv
 import dataclasses
 
 import numpy as np
+import pytest
 import torch
 
+from doctrpp.errors import CliError
 from doctrpp.export.checkpoint import load_model
 from doctrpp.export.config import TINY
 from doctrpp.files import save_npy_atomically
@@ -193,6 +195,38 @@ def test_publish_writes_fp16_default_with_record(tmp_path):
         worst = float((loaded(x) - model.eval()(x)).abs().max())
     print(f"fp16 storage vs fp32 weights (tiny, random): largest difference {worst:.3g} px")
     assert worst < 0.5
+
+
+def test_publish_rescore_replaces_generated_scores_only(tmp_path):
+    """After a generator change the published record is re-scored on the new validation set:
+    generated scores replaced (the old ones kept), real-photo scores and weights untouched."""
+    import json
+
+    from doctrpp.export.model import DocTrPP
+    from doctrpp.files import sha256_of
+    from doctrpp.training.publish import publish, rescore
+
+    run = tmp_path / "run"
+    run.mkdir()
+    state = {"step": 5, "samples_seen": 40, "cpu_seconds": 36.0, "wall_seconds": 20.0}
+    ckpt = {"model": DocTrPP(TINY).state_dict(), "config": dataclasses.asdict(TINY)}
+    torch.save({**ckpt, "train_state": state}, run / "best.pth")
+    lines = [
+        {"step": 0, "identity": True, "map_error_px/all": 48.0, "real/kept_share/none": 1.0},
+        {"step": 5, "map_error_px/all": 1.0, "real/kept_share/none": 0.9},
+    ]
+    (run / "validation.jsonl").write_text("".join(json.dumps(r) + "\n" for r in lines))
+    weights = publish(run / "best.pth", tmp_path / "weights", note="test")
+    digest = sha256_of(weights)
+    record = rescore(tmp_path / "weights", validation_size=3)
+    assert json.loads(weights.with_suffix(".json").read_text()) == record
+    assert sha256_of(weights) == digest == record["sha256"]
+    assert record["validation"]["real/kept_share/none"] == 0.9
+    assert record["validation"]["map_error_px/all"] > 1.0  # random weights, really scored
+    assert set(record["identity"]) > {"map_error_px/complete", "map_error_px/all"}
+    assert record["validation_before_rescore"]["validation"] == {"map_error_px/all": 1.0}
+    with pytest.raises(CliError, match="no published default"):
+        rescore(tmp_path / "nothing")
 
 
 def test_complete_first_curriculum_switches_to_mixed():
