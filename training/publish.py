@@ -74,9 +74,13 @@ def publish(checkpoint_path: Path, out_dir: Path, note: str) -> Path:
     weights = out_dir / DEFAULT_NAME
     write_bytes_atomically(weights, buffer.getvalue())
     record = {**record, "sha256": sha256_of(weights), "file": DEFAULT_NAME}
-    text = json.dumps(record, indent=2, sort_keys=True) + "\n"
-    write_bytes_atomically(weights.with_suffix(".json"), text.encode())
+    write_record(weights.with_suffix(".json"), record)
     return weights
+
+
+def write_record(path: Path, record: dict) -> None:
+    text = json.dumps(record, indent=2, sort_keys=True) + "\n"
+    write_bytes_atomically(path, text.encode())
 
 
 GENERATED_SCORES = ("map_error_px/", "ms_ssim_m/", "nonprojective_recovered/")
@@ -108,8 +112,7 @@ def rescore(out_dir: Path, validation_size: int = 48) -> dict:
         record[part] = {**kept, **scores}
     record["validation_before_rescore"] = before
     record["rescored"] = datetime.date.today().isoformat()
-    text = json.dumps(record, indent=2, sort_keys=True) + "\n"
-    write_bytes_atomically(record_path, text.encode())
+    write_record(record_path, record)
     return record
 
 

@@ -76,7 +76,7 @@ CREASE_SHARPNESS = (0.01, 0.03)
 # nearly from the front, and fill the frame; our crops showed rotated trapezoids filling
 # half of it. Most cameras are now "aligned"; the rest keep the strong handheld angles.
 # Session 7: the maps' bending (what is left after the best homography, map_shape.py) of
-# session 6's complete crops was 1.4 px median at 288 px: text lines on them looked
+# session 6's complete crops was 1.8 px median at 288 px: text lines on them looked
 # straight where docunet_dev's visibly wave. Two causes, both changed: the cameras stood
 # 2.5-6 page heights away (a telephoto view, in which a page's height changes hardly move
 # its image; a phone photographs a page from about its own height, with a wide lens), and
