@@ -38,8 +38,8 @@ def random_look(rng: np.random.Generator) -> Look:
     if rng.random() < 0.2:
         highlight = (*rng.uniform(0, 1, 2), rng.uniform(0.1, 0.5), rng.uniform(20, 80))
     motion: tuple[float, ...] = ()
-    if rng.random() < 0.12:
-        motion = (rng.uniform(2, 7), rng.uniform(0, 180))
+    if rng.random() < ranges.MOTION_SHARE:
+        motion = (rng.uniform(*ranges.MOTION_LENGTH), rng.uniform(0, 180))
     hand_shadow: tuple[float, ...] = ()
     if rng.random() < ranges.HAND_SHADOW_SHARE:
         hand_shadow = (
@@ -63,7 +63,9 @@ def random_look(rng: np.random.Generator) -> Look:
         fingers=tuple(float(c) for c in fingers),
         vignette=float(rng.uniform(*ranges.VIGNETTE)),
         edge_defocus=float(
-            rng.uniform(0.8, 2.5) if rng.random() < ranges.EDGE_DEFOCUS_SHARE else 0.0
+            rng.uniform(*ranges.EDGE_DEFOCUS_SIGMA)
+            if rng.random() < ranges.EDGE_DEFOCUS_SHARE
+            else 0.0
         ),
         light=tuple(float(c) for c in light),
         ambient=float(rng.uniform(*ranges.AMBIENT)),
@@ -80,7 +82,9 @@ def random_look(rng: np.random.Generator) -> Look:
         ),
         motion=tuple(float(c) for c in motion),
         noise_sigma=float(rng.uniform(*ranges.NOISE_SIGMA)),
-        jpeg_quality=int(rng.integers(35, 96)) if rng.random() < 0.6 else 0,
+        jpeg_quality=(
+            int(rng.integers(*ranges.JPEG_QUALITY)) if rng.random() < ranges.JPEG_SHARE else 0
+        ),
     )
 
 
