@@ -83,7 +83,13 @@ def write_record(path: Path, record: dict) -> None:
     write_bytes_atomically(path, text.encode())
 
 
-GENERATED_SCORES = ("map_error_px/", "ms_ssim_m/", "nonprojective_recovered/")
+GENERATED_SCORES = (
+    "map_error_px/",
+    "ms_ssim_m/",
+    "nonprojective_recovered/",
+    "ms_ssim/",
+    "local_distortion/",
+)
 
 
 def rescore(out_dir: Path, validation_size: int = 48) -> dict:
