@@ -18,6 +18,8 @@ from doctrpp.udir.surface import (
     Lift,
     SurfaceParams,
     folds_over,
+    invert,
+    project,
     random_surface,
     surface_points,
 )
@@ -68,6 +70,26 @@ def test_gt_map_inverts_the_render_geometry(seed, report_difference):
     # max 0.14 px; without the refinement 0.08 and 0.48).
     assert np.quantile(error, 0.95) < 0.05
     assert error.max() < 0.2
+
+
+def test_inversion_stops_early_without_changing_the_result(monkeypatch, report_difference):
+    """Points leave Newton's loop once their step is below NEWTON_TOLERANCE; every point
+    stepped all 12 times (tolerance -1) lands on the same page position."""
+    import doctrpp.udir.surface as surface
+
+    scene = make_scene(203, "complete")
+    x0, y0, x1, y1 = scene.crop  # image pixels: the page and some background
+    x, y = np.meshgrid(np.linspace(x0, x1, 61), np.linspace(y0, y1, 61))
+    early = invert(scene.surface, x, y)
+    monkeypatch.setattr(surface, "NEWTON_TOLERANCE", -1.0)
+    full = invert(scene.surface, x, y)
+    difference = max(np.abs(early[0] - full[0]).max(), np.abs(early[1] - full[1]).max())
+    report_difference("page (u, v), early stop vs 12 iterations", difference, 1e-8, "page")
+    assert difference < 1e-8
+    on_page = (full[0] >= 0) & (full[0] <= 1) & (full[1] >= 0) & (full[1] <= 1)
+    assert on_page.mean() > 0.2  # the grid covers the page, not only the background
+    back_x, back_y = project(scene.surface, *early)
+    assert np.abs(back_x - x)[on_page].max() < 1e-6 and np.abs(back_y - y)[on_page].max() < 1e-6
 
 
 @pytest.mark.parametrize("seed", SEEDS)
