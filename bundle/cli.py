@@ -52,6 +52,10 @@ def describe_contract() -> dict:
             "meaning": contract.OUTPUT_CONVENTION,
         },
         "postprocess": [
+            "smooth each output channel on the model grid (recommended; skip it for the "
+            "reference's post-processing): extend each border by 8 px of odd reflection "
+            "(2 * edge - mirror), Gaussian blur sigma 2 px with a 17 x 17 kernel, crop back "
+            "to 288 x 288 (doctrpp.runtime.processing.smooth_backward_map; removes jagged text)",
             "resize each output channel to the photo's width x height (bilinear)",
             "blur each channel with a 3x3 box filter (cv2.blur, border reflect-101)",
             "px = (x + 1) / 2 * (W - 1); py = (y + 1) / 2 * (H - 1)",

@@ -12,13 +12,19 @@ import numpy as np
 from doctrpp import contract
 
 from .backends import ModelError, open_backend
-from .processing import model_input, photo_map, rectify_with_map
+from .processing import (
+    MAP_SMOOTHING_SIGMA,
+    model_input,
+    photo_map,
+    rectify_with_map,
+    smooth_backward_map,
+)
 
 
 @dataclass
 class RectificationResult:
     rectified: np.ndarray  # same size, channels and dtype as the input
-    backward_map: np.ndarray  # (S, S, 2) normalised, x then y
+    backward_map: np.ndarray  # (S, S, 2) normalised, x then y, smoothed as used
     timings: dict[str, float] = field(default_factory=dict)  # seconds per stage
 
     def photo_map(self, out: np.ndarray | None = None) -> np.ndarray:
@@ -32,9 +38,21 @@ class RectificationResult:
 
 class Rectifier:
     """Runs a DocTr++ model file (.onnx or .tflite) on photos given as OpenCV arrays
-    (gray, BGR or BGRA; an alpha channel is remapped like the colour)."""
+    (gray, BGR or BGRA; an alpha channel is remapped like the colour).
 
-    def __init__(self, model_path: str | Path, threads: int | None = None) -> None:
+    `map_smoothing`: Gaussian sigma in model-grid pixels applied to the model's map before
+    the remap (`processing.smooth_backward_map`); 0 reproduces the reference
+    post-processing."""
+
+    def __init__(
+        self,
+        model_path: str | Path,
+        threads: int | None = None,
+        map_smoothing: float = MAP_SMOOTHING_SIGMA,
+    ) -> None:
+        if map_smoothing < 0:
+            raise ValueError(f"map_smoothing must be >= 0, got {map_smoothing}")
+        self.map_smoothing = map_smoothing
         self.model_path = Path(model_path)
         self.backend = open_backend(self.model_path, threads)
         self.metadata = self.backend.metadata
@@ -53,7 +71,8 @@ class Rectifier:
         return int(size)
 
     def predict_map(self, image: np.ndarray) -> np.ndarray:
-        """The normalised backward map on the model grid, (S, S, 2), x then y."""
+        """The model's normalised backward map on its grid, (S, S, 2), x then y (not
+        smoothed: what parity and drift compare)."""
         return self.backend.run(model_input(image, self.input_size))[0].transpose(1, 2, 0)
 
     def run(self, image: np.ndarray) -> RectificationResult:
@@ -67,6 +86,7 @@ class Rectifier:
         timings["inference"] = time.perf_counter() - start
 
         start = time.perf_counter()
+        backward_map = smooth_backward_map(backward_map, self.map_smoothing)
         rectified = rectify_with_map(image, backward_map)
         timings["postprocess"] = time.perf_counter() - start
         return RectificationResult(rectified, np.ascontiguousarray(backward_map), timings)

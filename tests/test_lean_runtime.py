@@ -13,7 +13,7 @@ import pytest
 
 from doctrpp.cli import main
 from doctrpp.runtime import Rectifier, read_image
-from doctrpp.runtime.processing import photo_map, rectify_with_map
+from doctrpp.runtime.processing import photo_map, rectify_with_map, smooth_backward_map
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -73,13 +73,36 @@ def test_jobs_give_the_same_files_as_one_at_a_time(tiny_onnx, document_photo, tm
         assert np.array_equal(a, cv2.imread(str(tmp_path / "3" / f"p{i}_rectified.png")))
 
 
-@pytest.mark.parametrize("flag", ["--threads", "--jobs"])
-@pytest.mark.parametrize("value", ["0", "-3", "two"])
+@pytest.mark.parametrize(
+    "flag, value",
+    [
+        *[(f, v) for f in ("--threads", "--jobs") for v in ("0", "-3", "two")],
+        ("--map-smoothing", "-1"),
+        ("--map-smoothing", "nan"),
+        ("--map-smoothing", "soft"),
+    ],
+)
 def test_counts_must_be_positive(flag, value, tiny_onnx, tmp_path, capsys):
     with pytest.raises(SystemExit) as stop:
         main(["rectify", str(tmp_path), "--model", str(tiny_onnx), "-o", "o", flag, value])
     assert stop.value.code == 2
     assert flag in capsys.readouterr().err
+
+
+def test_map_smoothing_zero_is_the_reference_post_processing(tiny_onnx, document_photo, tmp_path):
+    source = tmp_path / "p.png"
+    cv2.imwrite(str(source), document_photo)
+    args = ["rectify", str(source), "--model", str(tiny_onnx), "-o"]
+    assert main([*args, str(tmp_path / "raw.png"), "--map-smoothing", "0"]) == 0
+    assert main([*args, str(tmp_path / "smooth.png")]) == 0
+    rectifier = Rectifier(tiny_onnx)
+    raw = rectify_with_map(document_photo, rectifier.predict_map(document_photo))
+    assert np.array_equal(cv2.imread(str(tmp_path / "raw.png")), raw)
+    result = rectifier.run(document_photo)  # the default smooths the map it uses
+    assert np.array_equal(
+        result.backward_map, smooth_backward_map(rectifier.predict_map(document_photo))
+    )
+    assert np.array_equal(cv2.imread(str(tmp_path / "smooth.png")), result.rectified)
 
 
 def test_saved_map_is_the_remap_map(tiny_onnx, document_photo, tmp_path):

