@@ -92,3 +92,22 @@ def test_fingers_are_drawn_over_the_page():
     without = type(scene.look)(**{**scene.look.__dict__, "fingers": ()})
     plain.look = without
     assert np.abs(image.astype(int) - plain.render(288, 288).astype(int)).max() > 40
+
+
+def test_some_pages_are_printed_light_on_dark():
+    """REVERSED_PRINT_SHARE of the pages: a dark flood with light lettering; the choice has
+    its own random stream, so every other page is drawn as before."""
+    from doctrpp.udir.sample import page_for
+
+    chosen = [
+        seed
+        for seed in range(1000)
+        if np.random.default_rng([seed, 0xDA2C]).random() < ranges.REVERSED_PRINT_SHARE
+    ]
+    assert 0.5 * ranges.REVERSED_PRINT_SHARE < len(chosen) / 1000 < 2 * ranges.REVERSED_PRINT_SHARE
+    page = page_for(chosen[0]).mean(-1)
+    background = float(np.median(page))
+    assert background < ranges.REVERSED_FLOOD[1] + 30  # a dark page ...
+    assert float(np.quantile(page, 0.995)) > background + 60  # ... with light lettering
+    normal = page_for(chosen[0] + 1).mean(-1)
+    assert float(np.median(normal)) > 150  # its neighbour is printed as usual

@@ -51,6 +51,17 @@ def print_on_paper(rng: np.random.Generator, canvas: np.ndarray) -> np.ndarray:
     return np.clip(paper * (1 - ink) + 0.5, 0, 255).astype(np.uint8)
 
 
+def reversed_print(rng: np.random.Generator, page: np.ndarray) -> np.ndarray:
+    """A printed page's tones reversed between a dark flood colour and light lettering, as
+    in print that floods the sheet and leaves the letters paper-coloured (pictures come out
+    as negatives); paper texture and print noise carry over."""
+    flood = np.clip(rng.uniform(*ranges.REVERSED_FLOOD) + rng.uniform(-8, 8, 3), 0, 255)
+    letters = np.clip(rng.uniform(*ranges.REVERSED_LETTERS) + rng.uniform(-6, 6, 3), 0, 255)
+    tone = page.astype(np.float32) / 255.0
+    out = letters.astype(np.float32) - (letters - flood).astype(np.float32) * tone
+    return np.clip(out + 0.5, 0, 255).astype(np.uint8)
+
+
 def photo(rng: np.random.Generator, h: int, w: int) -> np.ndarray:
     """A photo-like picture: smooth colour regions, objects, texture (BGR uint8)."""
     h, w = max(h, 1), max(w, 1)

@@ -101,6 +101,11 @@ SHOW_THROUGH = (0.0, 0.12)  # contrast of the other side's print (mirrored, blur
 SHOW_THROUGH_SHARE = 0.4
 INK_BLEED_SIGMA = (0.0, 0.7)  # px at PAGE_LONG_SIDE
 PRINT_NOISE = (0.0, 0.25)  # relative ink density noise
+# Light print on a dark or grey flood (covers, slides, posters): docunet_dev shows it in 4 of
+# 96 photos (8_1, 8_2: white on black; 43_1, 43_2: white on grey).
+REVERSED_PRINT_SHARE = 0.05
+REVERSED_FLOOD = (8, 110)  # grey level of the flood colour
+REVERSED_LETTERS = (190, 248)  # grey level of the lettering (the paper left unprinted)
 
 # -- framing (sample.py) ---------------------------------------------------------------------
 # Session 8: docunet_dev's pages fill their frames (background on one or two sides, a few

@@ -11,6 +11,7 @@ import numpy as np
 from . import ranges
 from .documents import render_page
 from .effects import random_look
+from .paper import reversed_print
 from .scene import KINDS, Scene
 from .surface import folds_over, invert, project, random_surface
 
@@ -79,6 +80,10 @@ def choose_crop(rng: np.random.Generator, surface, kind: str) -> tuple[float, fl
 def page_for(page_seed: int, long_side: int = ranges.PAGE_LONG_SIDE) -> np.ndarray:
     """The flat page of `page_seed` (cached: training reuses a page for a few scenes)."""
     page = render_page(np.random.default_rng([page_seed, 0x9A6E]), long_side)
+    # Its own stream, so that adding it left every other page as it was.
+    reverse = np.random.default_rng([page_seed, 0xDA2C])
+    if reverse.random() < ranges.REVERSED_PRINT_SHARE:
+        page = reversed_print(reverse, page)
     page.setflags(write=False)
     return page
 
