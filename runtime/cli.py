@@ -14,6 +14,7 @@ from doctrpp.progress import progress
 
 from .backends import ModelError
 from .imageio import IMAGE_SUFFIXES, ImageError, has_alpha, read_image, write_image
+from .processing import MAP_SMOOTHING_SIGMA
 
 
 def add_parser(commands: argparse._SubParsersAction) -> None:
@@ -47,10 +48,10 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--map-smoothing",
         type=non_negative_float,
-        default=None,
+        default=MAP_SMOOTHING_SIGMA,
         metavar="SIGMA",
         help="Gaussian sigma (model-grid pixels) for the model's map before the remap; removes "
-        "jagged text (default 2; 0 = the reference post-processing)",
+        f"jagged text (default {MAP_SMOOTHING_SIGMA:g}; 0 = the reference post-processing)",
     )
     p.add_argument(
         "--jobs",
@@ -133,7 +134,6 @@ def run(args: argparse.Namespace) -> int:
         if target.resolve() in resolved_inputs:
             raise CliError(f"output {target} would overwrite an input")
 
-    smoothing = {} if args.map_smoothing is None else {"map_smoothing": args.map_smoothing}
     if args.model is None:
         from .models import NoShippedModel, shipped_model
 
@@ -142,7 +142,7 @@ def run(args: argparse.Namespace) -> int:
         except NoShippedModel as exc:
             raise CliError(str(exc)) from None
     try:
-        rectifier = Rectifier(args.model, threads=args.threads, **smoothing)
+        rectifier = Rectifier(args.model, threads=args.threads, map_smoothing=args.map_smoothing)
     except ModelError as exc:
         raise CliError(str(exc)) from None
     note = rectifier.metadata.get(contract.META_CHECKPOINT_NOTE, "")

@@ -90,13 +90,17 @@ def _box3(block: np.ndarray, width: int) -> np.ndarray:
     return (padded[:, :-2] + padded[:, 1:-1] + padded[:, 2:]) / np.float32(9)
 
 
+def check_map_smoothing(sigma: float) -> None:
+    if not sigma >= 0:
+        raise ValueError(f"map smoothing sigma must be >= 0, got {sigma}")
+
+
 def smooth_backward_map(backward_map: np.ndarray, sigma: float = MAP_SMOOTHING_SIGMA) -> np.ndarray:
     """(S, S, 2) normalised map -> the same, Gaussian-smoothed (`sigma` in grid pixels,
     kernel radius ceil(4 sigma)). The borders are extended by odd reflection
     (2 * edge - mirror image), which continues a ramp exactly: the identity and any affine
     map come out unchanged, and the map is not pulled inwards at the borders."""
-    if not sigma >= 0:
-        raise ValueError(f"map smoothing sigma must be >= 0, got {sigma}")
+    check_map_smoothing(sigma)
     backward_map = np.asarray(backward_map, np.float32)
     if sigma == 0:
         return backward_map

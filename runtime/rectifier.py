@@ -14,6 +14,7 @@ from doctrpp import contract
 from .backends import ModelError, open_backend
 from .processing import (
     MAP_SMOOTHING_SIGMA,
+    check_map_smoothing,
     model_input,
     photo_map,
     rectify_with_map,
@@ -50,8 +51,7 @@ class Rectifier:
         threads: int | None = None,
         map_smoothing: float = MAP_SMOOTHING_SIGMA,
     ) -> None:
-        if map_smoothing < 0:
-            raise ValueError(f"map_smoothing must be >= 0, got {map_smoothing}")
+        check_map_smoothing(map_smoothing)
         self.map_smoothing = map_smoothing
         self.model_path = Path(model_path)
         self.backend = open_backend(self.model_path, threads)

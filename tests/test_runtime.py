@@ -190,7 +190,9 @@ def _roughness_px(backward_map: np.ndarray) -> float:
 
 
 def test_map_smoothing_keeps_smooth_maps_and_removes_jitter(report_difference):
-    identity = np.stack(np.meshgrid(*[np.linspace(-1, 1, 288, dtype=np.float32)] * 2), -1)
+    from doctrpp.contract import identity_map
+
+    identity = identity_map()
     assert np.abs(smooth_backward_map(identity) - identity).max() < 1e-6
     smooth = smooth_map()
     moved = float(np.abs(smooth_backward_map(smooth) - smooth).max() * 143.5)

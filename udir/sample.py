@@ -80,12 +80,19 @@ def choose_crop(rng: np.random.Generator, surface, kind: str) -> tuple[float, fl
 def page_for(page_seed: int, long_side: int = ranges.PAGE_LONG_SIDE) -> np.ndarray:
     """The flat page of `page_seed` (cached: training reuses a page for a few scenes)."""
     page = render_page(np.random.default_rng([page_seed, 0x9A6E]), long_side)
-    # Its own stream, so that adding it left every other page as it was.
-    reverse = np.random.default_rng([page_seed, 0xDA2C])
-    if reverse.random() < ranges.REVERSED_PRINT_SHARE:
-        page = reversed_print(reverse, page)
+    stream = reversal(page_seed)
+    if stream is not None:
+        page = reversed_print(stream, page)
     page.setflags(write=False)
     return page
+
+
+def reversal(page_seed: int) -> np.random.Generator | None:
+    """The random stream that prints page `page_seed` light on dark, or None for the
+    REVERSED_PRINT_SHARE-complement printed as usual. Its own stream, so that adding it
+    left every other page as it was."""
+    stream = np.random.default_rng([page_seed, 0xDA2C])
+    return stream if stream.random() < ranges.REVERSED_PRINT_SHARE else None
 
 
 def make_scene(seed: int, kind: str, page_reuse: int = 1) -> Scene:
