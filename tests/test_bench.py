@@ -92,3 +92,33 @@ def test_sheets_and_int8_recipe_inputs(tiny_checkpoint, tmp_path):
     assert image.shape == (128, 192, 3)
     inputs = calibration_set("mixed", sorted(photos.iterdir()), 4)
     assert len(inputs) == 4 and inputs[0].shape == (1, 3, 288, 288)
+
+
+def test_recommendations_name_a_slow_int8_file_once():
+    from doctrpp.benchmarks.report import recommendations
+
+    def model(name, fmt, precision, ms, ratio):
+        accuracy = {"complete": {"drift_mean_px": 0.1, "drift_max_px": 0.5}}
+        latency = {"2": {"median_ms": ms, "p90_ms": ms}}
+        return {
+            "name": name,
+            "format": fmt,
+            "precision": precision,
+            "file_mb": 1.0,
+            "latency": latency,
+            "latency_ratio": ratio,
+            "accuracy": accuracy,
+        }
+
+    report = {
+        "models": [
+            model("ref.onnx", "onnx", "fp32", 50.0, 1.0),
+            model("half.tflite", "tflite", "fp16", 41.0, 0.82),
+            model("q.tflite", "tflite", "int8", 40.0, 0.8),
+            model("q.onnx", "onnx", "int8", 48.0, 0.96),
+        ]
+    }
+    lines = recommendations(report)
+    assert lines[0].startswith("phone: **q.tflite**") and "over the int8 speed target" in lines[0]
+    assert lines[-1].startswith("faithful but not fast enough") and "q.onnx" in lines[-1]
+    assert "q.tflite" not in lines[-1]
