@@ -387,3 +387,31 @@ def test_sample_reuse_counts_generated_crops(tmp_path):
         quick_settings(tmp_path / "r", steps=4, validate_every=4, kind="complete", sample_reuse=2)
     )
     assert state["samples_seen"] == 8 and state["generated_samples"] == 4
+
+
+def test_gradient_loss_ignores_placement_and_weighs_local_shape():
+    from doctrpp.training.losses import map_gradient_l1, map_l1, map_loss
+
+    target = torch.randn(2, 2, 32, 32)
+    shifted = target + 3.0  # the whole page moved: plain L1 sees it, the gradient term not
+    assert float(map_gradient_l1(shifted, target)) == pytest.approx(0.0, abs=1e-6)
+    assert float(map_l1(shifted, target)) == pytest.approx(3.0)
+    bent = target.clone()
+    bent[:, :, 16:, :] += 1.0  # a fold: a step across the map
+    assert float(map_gradient_l1(bent, target)) > 0
+    assert torch.equal(map_loss(bent, target, 0.0), map_l1(bent, target))
+    both = map_loss(bent, target, 2.0)
+    expected = map_l1(bent, target) + 2.0 * map_gradient_l1(bent, target)
+    assert torch.allclose(both, expected)
+
+
+def test_gradient_loss_trains_and_the_cli_rejects_a_negative_weight(tmp_path, capsys):
+    from doctrpp.cli import main
+
+    state = train(quick_settings(tmp_path / "g", kind="complete", gradient_loss=1.0))
+    assert state["step"] == 2
+    code = main(
+        ["train", "--out", str(tmp_path / "r"), "--config", "tiny", "--gradient-loss", "-1"]
+    )
+    assert code == 2
+    assert "--gradient-loss must be >= 0" in capsys.readouterr().err

@@ -104,6 +104,14 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         help="show each generated crop K times, each with its own colour jitter (data "
         "workers keep the last few hundred); pays when generation is slower than training",
     )
+    p.add_argument(
+        "--gradient-loss",
+        type=float,
+        default=0.0,
+        metavar="W",
+        help="add W times the L1 of the maps' 8-pixel differences, which ignores where the "
+        "page sits and weighs its local shape (default 0: the paper's plain L1)",
+    )
     p.set_defaults(handler=run)
 
 
@@ -136,6 +144,8 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.real_photos and not args.real_photos.is_dir():
         raise CliError(f"--real-photos {args.real_photos}: no such folder")
+    if args.gradient_loss < 0:
+        raise CliError("--gradient-loss must be >= 0")
     if args.page_reuse < 1:
         raise CliError("--page-reuse must be >= 1")
     if args.sample_reuse < 1:
@@ -172,6 +182,7 @@ def run(args: argparse.Namespace) -> int:
         real_photos=args.real_photos,
         page_reuse=args.page_reuse,
         sample_reuse=args.sample_reuse,
+        gradient_loss=args.gradient_loss,
         seed=args.seed,
     )
     state = train(settings)

@@ -20,6 +20,7 @@ from doctrpp.export.model import DocTrPP
 from doctrpp.files import write_bytes_atomically
 
 from .data import FolderCrops, GeneratedCrops, StreamSampler, reuse_window
+from .losses import map_loss
 from .realcheck import predict as predict_real
 from .realcheck import real_photo_set, score_real
 from .runlog import RunLog
@@ -55,6 +56,7 @@ class TrainSettings:
     sample_reuse: int = 1  # each generated crop is shown this many times (fresh jitter)
     real_photos: Path | None = None  # real photos for the reference-free check at validation
     real_photos_count: int = 16  # photos used (each as a complete, partial and none crop)
+    gradient_loss: float = 0.0  # weight of L1 on the maps' 8-px differences (0: the paper's loss)
     snapshots: bool = True  # keep a weights-only snapshot at each validation (to choose from)
 
 
@@ -305,7 +307,7 @@ def train(s: TrainSettings) -> dict:
         images, targets = images.to(env.device), targets.to(env.device)
         with torch.autocast(env.device.type, dtype=torch.bfloat16, enabled=s.bf16):
             predicted = net(images)
-        loss = (predicted.float() - targets).abs().mean()
+        loss = map_loss(predicted.float(), targets, s.gradient_loss)
         optimiser.zero_grad(set_to_none=True)
         loss.backward()
         optimiser.step()
