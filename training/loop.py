@@ -1,4 +1,5 @@
-"""The training loop: L1 on the backward map, AdamW, OneCycle; resumable; DDP-aware."""
+"""The training loop: L1 on the backward map (optionally on its local differences too), AdamW,
+OneCycle; resumable; DDP-aware."""
 
 from __future__ import annotations
 
