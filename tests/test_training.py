@@ -415,3 +415,6 @@ def test_gradient_loss_trains_and_the_cli_rejects_a_negative_weight(tmp_path, ca
     )
     assert code == 2
     assert "--gradient-loss must be >= 0" in capsys.readouterr().err
+    code = main(["train", "--out", str(tmp_path / "r"), "--real-photos-count", "0"])
+    assert code == 2
+    assert "--real-photos-count must be >= 1" in capsys.readouterr().err

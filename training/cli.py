@@ -105,6 +105,14 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "workers keep the last few hundred); pays when generation is slower than training",
     )
     p.add_argument(
+        "--real-photos-count",
+        type=int,
+        default=16,
+        metavar="N",
+        help="photos of --real-photos used by the check, each cut into a complete, partial and "
+        "no-boundary crop (default 16; more is less noisy and slower per validation)",
+    )
+    p.add_argument(
         "--gradient-loss",
         type=float,
         default=0.0,
@@ -144,6 +152,8 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.real_photos and not args.real_photos.is_dir():
         raise CliError(f"--real-photos {args.real_photos}: no such folder")
+    if args.real_photos_count < 1:
+        raise CliError("--real-photos-count must be >= 1")
     if args.gradient_loss < 0:
         raise CliError("--gradient-loss must be >= 0")
     if args.page_reuse < 1:
@@ -180,6 +190,7 @@ def run(args: argparse.Namespace) -> int:
         restart_schedule=args.restart_schedule,
         init=args.init,
         real_photos=args.real_photos,
+        real_photos_count=args.real_photos_count,
         page_reuse=args.page_reuse,
         sample_reuse=args.sample_reuse,
         gradient_loss=args.gradient_loss,
