@@ -26,6 +26,7 @@ import torch
 from doctrpp.export.config import config_by_name
 from doctrpp.export.model import DocTrPP
 from doctrpp.files import write_bytes_atomically
+from doctrpp.training.losses import map_l1
 
 VARIANTS = ("fp32", "bf16", "bf16+channels-last", "bf16+compile")
 DEFAULT_VARIANTS = ("fp32", "bf16")
@@ -47,7 +48,7 @@ def make_step(config: str, variant: str, batch: int, seed: int = 0):
     def step() -> float:
         with torch.autocast("cpu", dtype=torch.bfloat16, enabled=bf16):
             predicted = net(images)
-        loss = (predicted.float() - targets).abs().mean()
+        loss = map_l1(predicted.float(), targets)
         optimiser.zero_grad(set_to_none=True)
         loss.backward()
         optimiser.step()
