@@ -1,0 +1,51 @@
+"""The shortlist of snapshots that may ship (training.choose)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from doctrpp.training.choose import main
+
+KINDS = ("complete", "partial", "none")
+
+
+def _record(
+    step: int, error: float, coherence: float, black: float = 0.0, identity: bool = False
+) -> dict:
+    record = {"step": step, "map_error_px/all": error}
+    if identity:
+        record["identity"] = True
+    for kind in KINDS:
+        record[f"real/coherence_ratio/{kind}"] = coherence
+        record[f"real/black_share/{kind}"] = black
+    return record
+
+
+def _run(tmp_path: Path, records: list[dict]) -> Path:
+    run_dir = tmp_path / "s1"
+    run_dir.mkdir()
+    (run_dir / "validation.jsonl").write_text("".join(json.dumps(r) + "\n" for r in records))
+    return run_dir
+
+
+def test_shortlist_keeps_near_lowest_error_orders_by_coherence(tmp_path, capsys):
+    run_dir = _run(
+        tmp_path,
+        [
+            _record(0, 38.0, 1.0, identity=True),
+            _record(250, 12.0, 1.10),
+            _record(500, 11.8, 1.05),
+            _record(750, 11.0, 1.20, black=0.2),  # lowest error, but too much black
+            _record(1000, 12.5, 1.30),  # beyond the margin
+        ],
+    )
+    assert main([str(run_dir), "--margin", "0.3"]) == 0
+    table = capsys.readouterr().out
+    steps = [line.split("|")[2].strip() for line in table.splitlines() if line.startswith("| s1 ")]
+    assert steps == ["250", "500"]
+
+
+def test_missing_run_is_a_clear_error(tmp_path, capsys):
+    assert main([str(tmp_path / "nope")]) == 2
+    assert "no such file" in capsys.readouterr().err
