@@ -380,7 +380,7 @@ def plots(report: dict, out: Path) -> list[str]:
     ax.set_xlabel("median latency, 2 threads (ms)")
     ax.set_ylabel("worst per-kind mean drift (px)")
     fig.tight_layout()
-    fig.savefig(out / "drift_vs_latency.png", dpi=110)
+    fig.savefig(out / "drift_vs_latency.png", dpi=110, bbox_inches="tight")  # keep long labels
     plt.close(fig)
     written.append("drift_vs_latency.png")
     return written
