@@ -16,9 +16,9 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from .runlog import read_validation
+from doctrpp.udir.scene import KINDS
 
-KINDS = ("complete", "partial", "none")
+from .runlog import read_validation
 
 
 @dataclass(frozen=True)
