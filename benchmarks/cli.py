@@ -47,7 +47,8 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--pipeline",
         action="store_true",
-        help="also time the whole `doctrpp rectify` pipeline on 12 MP photos (--jobs 1 and 2) "
+        help="also time the whole `doctrpp rectify` pipeline on 12 MP photos (--jobs 1 and 2; "
+        "and --jobs 1 --no-flip-average) "
         "and measure peak RSS on a 108 MP photo (first model; a few minutes)",
     )
     p.add_argument(

@@ -52,6 +52,11 @@ def describe_contract() -> dict:
             "meaning": contract.OUTPUT_CONVENTION,
         },
         "postprocess": [
+            "flip-average (recommended; skip it for the reference's single run, at half the "
+            "inference time): run the model again on the input mirrored left-right (each row "
+            "of the 288 x 288 input reversed), mirror that output back (columns reversed, "
+            "channel 0 negated) and average it with the first output "
+            "(doctrpp.runtime.processing.flip_averaged_map; a closer map)",
             "smooth each output channel on the model grid (recommended; skip it for the "
             "reference's post-processing): extend each border by 8 px of odd reflection "
             "(2 * edge - mirror), Gaussian blur sigma 2 px with a 17 x 17 kernel, crop back "

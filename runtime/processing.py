@@ -1,5 +1,6 @@
 """Pre- and post-processing as the reference inference script does them, in bounded memory,
-plus our smoothing of the model's map (`smooth_backward_map`; 0 skips it).
+plus our smoothing of the model's map (`smooth_backward_map`; 0 skips it) and the mean of
+the maps of the photo and its mirror image (`flip_averaged_map`).
 
 Pre-processing resizes the photo in its own depth and converts only the 288x288 result to
 float (the reference converts the full photo first; the difference is under one grey
@@ -60,6 +61,27 @@ def model_input(image: np.ndarray, size: int) -> np.ndarray:
     small = cv2.resize(source, (size, size), interpolation=cv2.INTER_LINEAR)
     rgb = to_unit_rgb(small)
     return np.ascontiguousarray(rgb.transpose(2, 0, 1)[None])
+
+
+def mirrored_input(batch: np.ndarray) -> np.ndarray:
+    """(1, 3, S, S) model input -> the same photo mirrored left-right."""
+    return np.ascontiguousarray(batch[..., ::-1])
+
+
+def unmirror_map(mirrored_map: np.ndarray) -> np.ndarray:
+    """The map predicted for a mirrored input, (S, S, 2) normalised -> the map of the
+    original photo: columns reversed and x negated (align-corners coordinates mirror
+    exactly about 0)."""
+    backward_map = np.array(mirrored_map[:, ::-1], np.float32)
+    backward_map[:, :, 0] *= -1
+    return backward_map
+
+
+def flip_averaged_map(backward_map: np.ndarray, mirrored_map: np.ndarray) -> np.ndarray:
+    """Mean of the photo's map and the unmirrored map of its mirror image. The model is not
+    exactly mirror-symmetric; its two answers err partly independently, and their mean
+    is closer to the truth (MODEL_CARD.md, "Flip averaging")."""
+    return (np.asarray(backward_map, np.float32) + unmirror_map(mirrored_map)) / np.float32(2)
 
 
 def _reflect101(index: np.ndarray, n: int) -> np.ndarray:

@@ -15,6 +15,8 @@ from .backends import ModelError, open_backend
 from .processing import (
     MAP_SMOOTHING_SIGMA,
     check_map_smoothing,
+    flip_averaged_map,
+    mirrored_input,
     model_input,
     photo_map,
     rectify_with_map,
@@ -43,16 +45,22 @@ class Rectifier:
 
     `map_smoothing`: Gaussian sigma in model-grid pixels applied to the model's map before
     the remap (`processing.smooth_backward_map`); 0 reproduces the reference
-    post-processing."""
+    post-processing.
+
+    `flip_average`: also run the model on the mirrored photo and use the mean of the two
+    maps (`processing.flip_averaged_map`): twice the inference time, a closer map
+    (MODEL_CARD.md, "Flip averaging"); False runs the model once, as the reference does."""
 
     def __init__(
         self,
         model_path: str | Path,
         threads: int | None = None,
         map_smoothing: float = MAP_SMOOTHING_SIGMA,
+        flip_average: bool = True,
     ) -> None:
         check_map_smoothing(map_smoothing)
         self.map_smoothing = map_smoothing
+        self.flip_average = flip_average
         self.model_path = Path(model_path)
         self.backend = open_backend(self.model_path, threads)
         self.metadata = self.backend.metadata
@@ -71,9 +79,19 @@ class Rectifier:
         return int(size)
 
     def predict_map(self, image: np.ndarray) -> np.ndarray:
-        """The model's normalised backward map on its grid, (S, S, 2), x then y (not
-        smoothed: what parity and drift compare)."""
-        return self.backend.run(model_input(image, self.input_size))[0].transpose(1, 2, 0)
+        """The model's normalised backward map on its grid, (S, S, 2), x then y: one run,
+        neither flip-averaged nor smoothed (what parity and drift compare)."""
+        return self._infer(model_input(image, self.input_size))
+
+    def _infer(self, batch: np.ndarray) -> np.ndarray:
+        return self.backend.run(batch)[0].transpose(1, 2, 0)
+
+    def model_map(self, batch: np.ndarray) -> np.ndarray:
+        """The map the pipeline uses before smoothing: flip-averaged unless switched off."""
+        backward_map = self._infer(batch)
+        if self.flip_average:
+            backward_map = flip_averaged_map(backward_map, self._infer(mirrored_input(batch)))
+        return backward_map
 
     def run(self, image: np.ndarray) -> RectificationResult:
         timings: dict[str, float] = {}
@@ -82,7 +100,7 @@ class Rectifier:
         timings["preprocess"] = time.perf_counter() - start
 
         start = time.perf_counter()
-        backward_map = self.backend.run(batch)[0].transpose(1, 2, 0)
+        backward_map = self.model_map(batch)
         timings["inference"] = time.perf_counter() - start
 
         start = time.perf_counter()

@@ -67,7 +67,8 @@ def test_whole_pipeline_section(tiny_onnx, tmp_path, monkeypatch):
     report = pipeline_report(
         Path(tiny_onnx.name), None, count=2, jobs=(1, 2), threads=1, megapixels=(0.3, 1.0)
     )
-    assert [row["jobs"] for row in report["throughput"]] == [1, 2]
+    runs = [(row["jobs"], row["flip_average"]) for row in report["throughput"]]
+    assert runs == [(1, True), (2, True), (1, False)]
     assert all(row["images_per_s"] > 0 and row["peak_rss_mb"] > 10 for row in report["throughput"])
     assert [row["save_map"] for row in report["memory"]] == [False, True]
     text = "\n".join(pipeline_markdown(report))

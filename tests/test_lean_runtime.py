@@ -13,7 +13,13 @@ import pytest
 
 from doctrpp.cli import main
 from doctrpp.runtime import Rectifier, read_image
-from doctrpp.runtime.processing import photo_map, rectify_with_map, smooth_backward_map
+from doctrpp.runtime.processing import (
+    flip_averaged_map,
+    model_input,
+    photo_map,
+    rectify_with_map,
+    smooth_backward_map,
+)
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -89,20 +95,26 @@ def test_counts_must_be_positive(flag, value, tiny_onnx, tmp_path, capsys):
     assert flag in capsys.readouterr().err
 
 
-def test_map_smoothing_zero_is_the_reference_post_processing(tiny_onnx, document_photo, tmp_path):
+def test_one_run_and_no_smoothing_is_the_reference_post_processing(
+    tiny_onnx, document_photo, tmp_path
+):
     source = tmp_path / "p.png"
     cv2.imwrite(str(source), document_photo)
     args = ["rectify", str(source), "--model", str(tiny_onnx), "-o"]
-    assert main([*args, str(tmp_path / "raw.png"), "--map-smoothing", "0"]) == 0
-    assert main([*args, str(tmp_path / "smooth.png")]) == 0
+    raw_args = ["--map-smoothing", "0", "--no-flip-average"]
+    assert main([*args, str(tmp_path / "raw.png"), *raw_args]) == 0
+    assert main([*args, str(tmp_path / "default.png")]) == 0
     rectifier = Rectifier(tiny_onnx)
     raw = rectify_with_map(document_photo, rectifier.predict_map(document_photo))
     assert np.array_equal(cv2.imread(str(tmp_path / "raw.png")), raw)
-    result = rectifier.run(document_photo)  # the default smooths the map it uses
-    assert np.array_equal(
-        result.backward_map, smooth_backward_map(rectifier.predict_map(document_photo))
-    )
-    assert np.array_equal(cv2.imread(str(tmp_path / "smooth.png")), result.rectified)
+    # The default flip-averages and smooths the map it uses.
+    result = rectifier.run(document_photo)
+    batch = model_input(document_photo, rectifier.input_size)
+    mirrored = rectifier.predict_map(document_photo[:, ::-1])
+    averaged = flip_averaged_map(rectifier.predict_map(document_photo), mirrored)
+    assert np.abs(rectifier.model_map(batch) - averaged).max() < 1e-5  # resize is symmetric
+    assert np.array_equal(result.backward_map, smooth_backward_map(rectifier.model_map(batch)))
+    assert np.array_equal(cv2.imread(str(tmp_path / "default.png")), result.rectified)
 
 
 def test_saved_map_is_the_remap_map(tiny_onnx, document_photo, tmp_path):

@@ -12,7 +12,15 @@ import torch
 import torch.nn.functional as F
 
 from doctrpp.runtime import ImageError, ModelError, Rectifier, read_image
-from doctrpp.runtime.processing import model_input, photo_map, remap, smooth_backward_map
+from doctrpp.runtime.processing import (
+    flip_averaged_map,
+    model_input,
+    photo_map,
+    rectify_with_map,
+    remap,
+    smooth_backward_map,
+    unmirror_map,
+)
 
 
 def reference_rectify(photo_bgr: np.ndarray, backward_map: np.ndarray) -> np.ndarray:
@@ -204,3 +212,30 @@ def test_map_smoothing_keeps_smooth_maps_and_removes_jitter(report_difference):
     assert np.array_equal(smooth_backward_map(jagged, 0), jagged)
     with pytest.raises(ValueError, match="sigma"):
         smooth_backward_map(jagged, -1)
+
+
+def test_unmirrored_map_rectifies_the_mirrored_photo_as_the_mirror_image(document_photo):
+    """unmirror_map is the map of the mirrored photo: rectifying the mirrored photo with it
+    gives the mirror image of the rectified photo (exactly, up to interpolation)."""
+    backward_map = smooth_map()
+    mirrored_map = unmirror_map(backward_map)
+    assert np.array_equal(unmirror_map(mirrored_map), backward_map)  # an involution
+    rectified = rectify_with_map(document_photo, backward_map).astype(int)
+    mirrored = rectify_with_map(np.ascontiguousarray(document_photo[:, ::-1]), mirrored_map)
+    assert np.abs(mirrored[:, ::-1].astype(int) - rectified).max() <= 1
+
+
+def test_flip_average_keeps_a_mirror_consistent_answer(report_difference):
+    from doctrpp.contract import identity_map
+
+    identity = identity_map()
+    assert np.abs(unmirror_map(identity) - identity).max() < 1e-6
+    backward_map = smooth_map()
+    # A model that answers the mirrored photo with the mirrored map: nothing changes.
+    same = flip_averaged_map(backward_map, unmirror_map(backward_map))
+    moved = float(np.abs(same - backward_map).max() * 143.5)
+    report_difference("flip average of a mirror-consistent answer (grid px)", moved, 1e-4)
+    assert moved < 1e-4
+    other = smooth_map(seed=1)
+    expected = (backward_map + other) / 2
+    assert np.abs(flip_averaged_map(backward_map, unmirror_map(other)) - expected).max() < 1e-6

@@ -418,3 +418,29 @@ def test_gradient_loss_trains_and_the_cli_rejects_a_negative_weight(tmp_path, ca
     code = main(["train", "--out", str(tmp_path / "r"), "--real-photos-count", "0"])
     assert code == 2
     assert "--real-photos-count must be >= 1" in capsys.readouterr().err
+
+
+def test_flip_averaged_predictions_match_the_runtimes_definition(tiny_model):
+    """Scoring and sheets flip-average as `rectify` does: mean of the map and the
+    unmirrored map of the mirrored input."""
+    from doctrpp.runtime.processing import flip_averaged_map
+    from doctrpp.training.realcheck import RealItem, predict
+    from doctrpp.training.validate import ValidationItem, predict_maps
+
+    model = tiny_model
+    images = [generate(i, "complete").image for i in range(2)]
+    items = [ValidationItem("complete", im, np.zeros((288, 288, 2), np.float32)) for im in images]
+    mirrored = [dataclasses.replace(it, image=_mirrored(it.image)) for it in items]
+    averaged = predict_maps(model, items, flip_average=True)
+    one_run = zip(predict_maps(model, items), predict_maps(model, mirrored), strict=True)
+    for got, (one, other) in zip(averaged, one_run, strict=True):
+        assert np.abs(got - flip_averaged_map(one, other)).max() < 1e-5
+    real = [RealItem("p", "complete", im, {}) for im in images]
+    real_mirrored = [dataclasses.replace(it, image=_mirrored(it.image)) for it in real]
+    one_run = zip(predict(model, real), predict(model, real_mirrored), strict=True)
+    for got, (one, other) in zip(predict(model, real, flip_average=True), one_run, strict=True):
+        assert np.abs(got - flip_averaged_map(one, other)).max() < 1e-5
+
+
+def _mirrored(image: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(image[:, ::-1])

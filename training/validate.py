@@ -11,7 +11,7 @@ from doctrpp import contract
 from doctrpp.benchmarks.map_shape import nonprojective_recovery
 from doctrpp.benchmarks.metrics import local_distortion, map_drift, ms_ssim, ms_ssim_masked
 from doctrpp.contract import identity_map
-from doctrpp.runtime.processing import rectify_with_map
+from doctrpp.runtime.processing import flip_averaged_map, rectify_with_map
 from doctrpp.udir.sample import generate, kind_for_index
 
 from .data import VALIDATION_SEED_OFFSET, to_tensors
@@ -70,19 +70,29 @@ def predict_maps(
     items: list[ValidationItem],
     batch: int = 8,
     autocast_dtype: torch.dtype | None = None,
+    flip_average: bool = False,
 ) -> list[np.ndarray]:
+    """The model's maps of the items; `flip_average` as the runtime's default pipeline."""
     was_training = model.training
     model.eval()
     device = next(model.parameters()).device
-    maps: list[np.ndarray] = []
-    for start in range(0, len(items), batch):
-        chunk = items[start : start + batch]
-        images = torch.stack([to_tensors(it.image, it.backward_map)[0] for it in chunk])
+
+    def run(images: torch.Tensor) -> list[np.ndarray]:
         with torch.autocast(
             device.type, dtype=autocast_dtype or torch.bfloat16, enabled=autocast_dtype is not None
         ):
             pixels = model(images.to(device)).float().cpu().numpy()
-        maps.extend(contract.pixels_to_normalised(p).transpose(1, 2, 0) for p in pixels)
+        return [contract.pixels_to_normalised(p).transpose(1, 2, 0) for p in pixels]
+
+    maps: list[np.ndarray] = []
+    for start in range(0, len(items), batch):
+        chunk = items[start : start + batch]
+        images = torch.stack([to_tensors(it.image, it.backward_map)[0] for it in chunk])
+        chunk_maps = run(images)
+        if flip_average:
+            mirrored = run(torch.flip(images, dims=[-1]))
+            chunk_maps = list(map(flip_averaged_map, chunk_maps, mirrored))
+        maps.extend(chunk_maps)
     model.train(was_training)
     return maps
 
