@@ -23,13 +23,10 @@ from doctrpp.benchmarks.reference_free import (
     summarise,
 )
 from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
-from doctrpp.runtime.processing import (
-    flip_averaged_map,
-    mirrored_input,
-    model_input,
-    rectify_with_map,
-)
+from doctrpp.runtime.processing import model_input, rectify_with_map
 from doctrpp.udir.photos import crops_of_each_kind, spread
+
+from .validate import batch_maps
 
 
 @dataclass
@@ -58,24 +55,14 @@ def real_photo_set(folder: Path, photos: int = 32, seed: int = 0) -> list[RealIt
 def predict(
     model: torch.nn.Module, items: list[RealItem], batch: int = 8, flip_average: bool = False
 ) -> list[np.ndarray]:
-    """The model's maps of the items; `flip_average` as the runtime's default pipeline."""
+    """The model's maps of the items (`validate.batch_maps`), from the runtime's input."""
     was_training = model.training
     model.eval()
-    device = next(model.parameters()).device
-
-    def run(inputs: np.ndarray) -> list[np.ndarray]:
-        pixels = model(torch.from_numpy(inputs).to(device)).float().cpu().numpy()
-        return [contract.pixels_to_normalised(p).transpose(1, 2, 0) for p in pixels]
-
     maps = []
     for start in range(0, len(items), batch):
         chunk = items[start : start + batch]
         inputs = np.concatenate([model_input(it.image, contract.INPUT_SIZE) for it in chunk])
-        chunk_maps = run(inputs)
-        if flip_average:
-            mirrored = run(mirrored_input(inputs))
-            chunk_maps = list(map(flip_averaged_map, chunk_maps, mirrored))
-        maps.extend(chunk_maps)
+        maps.extend(batch_maps(model, torch.from_numpy(inputs), flip_average=flip_average))
     model.train(was_training)
     return maps
 

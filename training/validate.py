@@ -65,6 +65,31 @@ def score_maps(items: list[ValidationItem], predicted: list[np.ndarray]) -> dict
 
 
 @torch.no_grad()
+def batch_maps(
+    model: torch.nn.Module,
+    images: torch.Tensor,
+    autocast_dtype: torch.dtype | None = None,
+    flip_average: bool = False,
+) -> list[np.ndarray]:
+    """(N, 3, S, S) RGB inputs -> the model's normalised maps, (S, S, 2) each; with
+    `flip_average` each averaged with the unmirrored map of the mirrored input, as the
+    runtime's default pipeline (`runtime.processing.flip_averaged_map`)."""
+    device = next(model.parameters()).device
+
+    def run(inputs: torch.Tensor) -> list[np.ndarray]:
+        with torch.autocast(
+            device.type, dtype=autocast_dtype or torch.bfloat16, enabled=autocast_dtype is not None
+        ):
+            pixels = model(inputs.to(device)).float().cpu().numpy()
+        return [contract.pixels_to_normalised(p).transpose(1, 2, 0) for p in pixels]
+
+    maps = run(images)
+    if flip_average:
+        maps = list(map(flip_averaged_map, maps, run(torch.flip(images, dims=[-1]))))
+    return maps
+
+
+@torch.no_grad()
 def predict_maps(
     model: torch.nn.Module,
     items: list[ValidationItem],
@@ -72,27 +97,14 @@ def predict_maps(
     autocast_dtype: torch.dtype | None = None,
     flip_average: bool = False,
 ) -> list[np.ndarray]:
-    """The model's maps of the items; `flip_average` as the runtime's default pipeline."""
+    """The model's maps of the items (`batch_maps`)."""
     was_training = model.training
     model.eval()
-    device = next(model.parameters()).device
-
-    def run(images: torch.Tensor) -> list[np.ndarray]:
-        with torch.autocast(
-            device.type, dtype=autocast_dtype or torch.bfloat16, enabled=autocast_dtype is not None
-        ):
-            pixels = model(images.to(device)).float().cpu().numpy()
-        return [contract.pixels_to_normalised(p).transpose(1, 2, 0) for p in pixels]
-
     maps: list[np.ndarray] = []
     for start in range(0, len(items), batch):
         chunk = items[start : start + batch]
         images = torch.stack([to_tensors(it.image, it.backward_map)[0] for it in chunk])
-        chunk_maps = run(images)
-        if flip_average:
-            mirrored = run(torch.flip(images, dims=[-1]))
-            chunk_maps = list(map(flip_averaged_map, chunk_maps, mirrored))
-        maps.extend(chunk_maps)
+        maps.extend(batch_maps(model, images, autocast_dtype, flip_average))
     model.train(was_training)
     return maps
 
