@@ -61,6 +61,13 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "averaging the two maps (half the inference time; the map is less accurate)",
     )
     p.add_argument(
+        "--no-line-alignment",
+        dest="line_alignment",
+        action="store_false",
+        help="keep the model's map as it is instead of shifting its rows so that text "
+        "lines come out level (about 30 ms per photo)",
+    )
+    p.add_argument(
         "--jobs",
         type=positive_int,
         default=1,
@@ -154,6 +161,7 @@ def run(args: argparse.Namespace) -> int:
             threads=args.threads,
             map_smoothing=args.map_smoothing,
             flip_average=args.flip_average,
+            line_alignment=args.line_alignment,
         )
     except ModelError as exc:
         raise CliError(str(exc)) from None
@@ -212,7 +220,7 @@ def rectify_file(rectifier, pair: tuple[Path, Path], save_map: bool) -> tuple[st
     line = (
         f"wrote {target} ({image.shape[1]}x{image.shape[0]}; preprocess "
         f"{t['preprocess'] * 1e3:.0f} ms, inference {t['inference'] * 1e3:.0f} ms, "
-        f"postprocess {t['postprocess'] * 1e3:.0f} ms)"
+        f"map {t['map'] * 1e3:.0f} ms, remap {t['postprocess'] * 1e3:.0f} ms)"
     )
     return "", line, notes
 

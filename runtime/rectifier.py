@@ -12,6 +12,7 @@ import numpy as np
 from doctrpp import contract
 
 from .backends import ModelError, open_backend
+from .line_alignment import align_text_lines
 from .processing import (
     MAP_SMOOTHING_SIGMA,
     check_map_smoothing,
@@ -49,7 +50,10 @@ class Rectifier:
 
     `flip_average`: also run the model on the mirrored photo and use the mean of the two
     maps (`processing.flip_averaged_map`): twice the inference time, a closer map
-    (MODEL_CARD.md, "Flip averaging"); False runs the model once, as the reference does."""
+    (MODEL_CARD.md, "Flip averaging"); False runs the model once, as the reference does.
+
+    `line_alignment`: after smoothing, shift the map's rows so that text lines come out
+    level (`line_alignment.align_text_lines`; MODEL_CARD.md, "Text-line alignment")."""
 
     def __init__(
         self,
@@ -57,10 +61,12 @@ class Rectifier:
         threads: int | None = None,
         map_smoothing: float = MAP_SMOOTHING_SIGMA,
         flip_average: bool = True,
+        line_alignment: bool = True,
     ) -> None:
         check_map_smoothing(map_smoothing)
         self.map_smoothing = map_smoothing
         self.flip_average = flip_average
+        self.line_alignment = line_alignment
         self.model_path = Path(model_path)
         self.backend = open_backend(self.model_path, threads)
         self.metadata = self.backend.metadata
@@ -105,6 +111,11 @@ class Rectifier:
 
         start = time.perf_counter()
         backward_map = smooth_backward_map(backward_map, self.map_smoothing)
+        if self.line_alignment:
+            backward_map = align_text_lines(image, backward_map)
+        timings["map"] = time.perf_counter() - start
+
+        start = time.perf_counter()
         rectified = rectify_with_map(image, backward_map)
         timings["postprocess"] = time.perf_counter() - start
         return RectificationResult(rectified, np.ascontiguousarray(backward_map), timings)

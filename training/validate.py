@@ -20,14 +20,15 @@ from .data import VALIDATION_SEED_OFFSET, to_tensors
 @dataclass
 class ValidationItem:
     kind: str
-    image: np.ndarray  # BGR uint8 288x288
+    image: np.ndarray  # BGR uint8, 288x288 unless rendered larger
     backward_map: np.ndarray  # (288, 288, 2) normalised
 
 
-def validation_set(count: int = 48) -> list[ValidationItem]:
+def validation_set(count: int = 48, size: int = contract.INPUT_SIZE) -> list[ValidationItem]:
+    """The fixed validation crops; `size` renders them larger (their maps stay 288)."""
     items = []
     for i in range(count):
-        sample = generate(VALIDATION_SEED_OFFSET + i, kind_for_index(i))
+        sample = generate(VALIDATION_SEED_OFFSET + i, kind_for_index(i), size=size)
         items.append(ValidationItem(sample.kind, sample.image, sample.backward_map))
     return items
 
