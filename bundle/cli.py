@@ -61,7 +61,7 @@ def describe_contract() -> dict:
             "reference's post-processing): extend each border by 8 px of odd reflection "
             "(2 * edge - mirror), Gaussian blur sigma 2 px with a 17 x 17 kernel, crop back "
             "to 288 x 288 (doctrpp.runtime.processing.smooth_backward_map; removes jagged text)",
-            "align text lines (recommended where text matters; about 30 ms on a phone-class "
+            "align text lines (recommended where text matters; 30-100 ms on a laptop-class "
             "CPU, numpy/OpenCV only): render the rectified photo at 512 x 512 in gray, mark "
             "ink (darker than its 31 px median by 25), measure in 6 windows how the ink rows "
             "of 12 vertical bands shift between neighbouring bands, fit a quadratic slope "

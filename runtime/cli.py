@@ -65,7 +65,7 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         dest="line_alignment",
         action="store_false",
         help="keep the model's map as it is instead of shifting its rows so that text "
-        "lines come out level (about 30 ms per photo)",
+        "lines come out level (30-100 ms per photo)",
     )
     p.add_argument(
         "--jobs",

@@ -145,7 +145,8 @@ def window_offsets(ink: np.ndarray, params: LineAlignment) -> np.ndarray:
     if len(xs) < params.degree + 2:
         return np.zeros(params.bands)
     xs_arr, slopes_arr, weights_arr = np.asarray(xs), np.asarray(slopes), np.asarray(weights)
-    coefficients = np.polynomial.polynomial.polyfit(xs_arr, slopes_arr, params.degree, w=weights_arr)
+    polynomial = np.polynomial.polynomial
+    coefficients = polynomial.polyfit(xs_arr, slopes_arr, params.degree, w=weights_arr)
     # A pair that straddles two columns with staggered baselines gives a slope unlike its
     # neighbours': drop the outliers of the fit and fit again, twice.
     inliers = np.ones(len(xs_arr), bool)

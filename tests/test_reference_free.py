@@ -58,3 +58,22 @@ def test_a_zoomed_out_map_adds_black_and_a_zoomed_in_one_drops_content():
     assert 0.3 < black_share(out) < 0.4  # 1 - 0.8 ** 2
     assert black_share(inside) == 0.0
     assert 0.2 < kept_share(inside) < 0.3
+
+
+def test_ocr_check_counts_confident_words_without_tesseract():
+    from doctrpp.benchmarks.ocr_check import compare, parse_tsv, summarise_words
+
+    header = "\t".join(
+        ["level", "page", "block", "par", "line", "word"] + ["x"] * 4 + ["conf", "text"]
+    )
+    rows = [
+        "\t".join(["5"] + ["1"] * 9 + [conf, text])
+        for conf, text in [("91.5", "Platinum"), ("85", "to"), ("40", "Card"), ("-1", "")]
+    ]
+    words = parse_tsv("\n".join([header, *rows]))
+    assert words == [("Platinum", 91.5), ("to", 85.0), ("Card", 40.0)]
+    summary = summarise_words(words)  # "to" is too short, "Card" not confident
+    assert summary["confident_words"] == 1 and summary["confident_letters"] == 8
+    table = compare([{"untouched": summarise_words([]), "rectified": summary, "aligned": summary}])
+    assert table["rectified"]["more_than_untouched"] == 1
+    assert table["aligned"]["fewer_than_rectified"] == 0
