@@ -4,6 +4,7 @@ import importlib.util
 import os
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 
@@ -107,3 +108,18 @@ def pytest_terminal_summary(terminalreporter):
         terminalreporter.section("measured differences")
         for line in _PARITY_LINES:
             terminalreporter.write_line(line)
+
+
+# The photo kinds the runtime accepts, made from an 8-bit BGR photo.
+PHOTO_KINDS = {
+    "gray": lambda im: cv2.cvtColor(im, cv2.COLOR_BGR2GRAY),
+    "bgra": lambda im: cv2.cvtColor(im, cv2.COLOR_BGR2BGRA),
+    "uint16": lambda im: im.astype(np.uint16) * 257,
+    "float": lambda im: im.astype(np.float32) / 255.0,
+}
+
+
+@pytest.fixture(params=list(PHOTO_KINDS.values()), ids=list(PHOTO_KINDS))
+def convert_photo(request):
+    """Each accepted photo kind in turn: a function of an 8-bit BGR photo."""
+    return request.param

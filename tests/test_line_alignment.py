@@ -72,19 +72,10 @@ def test_level_lines_and_blank_pages_stay_as_they_are(report_difference):
     assert moved < 1.0  # a fifth of what the wavy test corrects
 
 
-@pytest.mark.parametrize(
-    "convert",
-    [
-        lambda im: cv2.cvtColor(im, cv2.COLOR_BGR2GRAY),
-        lambda im: cv2.cvtColor(im, cv2.COLOR_BGR2BGRA),
-        lambda im: im.astype(np.uint16) * 257,
-        lambda im: im.astype(np.float32) / 255,
-    ],
-)
-def test_every_photo_kind_gives_the_same_alignment(convert):
+def test_every_photo_kind_gives_the_same_alignment(convert_photo):
     page, wavy = text_page(), wavy_map(0.03)
-    assert np.array_equal(gray_uint8(convert(page), 1024), gray_uint8(page, 1024))
-    assert np.allclose(align_text_lines(convert(page), wavy), align_text_lines(page, wavy))
+    assert np.array_equal(gray_uint8(convert_photo(page), 1024), gray_uint8(page, 1024))
+    assert np.allclose(align_text_lines(convert_photo(page), wavy), align_text_lines(page, wavy))
 
 
 def test_no_iterations_is_the_identity_and_bad_parameters_are_refused():

@@ -83,18 +83,8 @@ def test_rectifier_on_tiny_model(tiny_onnx, tiny_model, document_photo):
     assert result.photo_map().shape == (300, 240, 2)
 
 
-@pytest.mark.parametrize(
-    "convert",
-    [
-        lambda im: cv2.cvtColor(im, cv2.COLOR_BGR2GRAY),
-        lambda im: cv2.cvtColor(im, cv2.COLOR_BGR2BGRA),
-        lambda im: im.astype(np.uint16) * 257,
-        lambda im: im.astype(np.float32) / 255.0,
-    ],
-    ids=["gray", "bgra", "uint16", "float"],
-)
-def test_input_kinds_keep_size_channels_and_depth(tiny_onnx, document_photo, convert):
-    image = convert(document_photo)
+def test_input_kinds_keep_size_channels_and_depth(tiny_onnx, document_photo, convert_photo):
+    image = convert_photo(document_photo)
     rectifier = Rectifier(tiny_onnx)
     out = rectifier.rectify(image)
     assert out.shape == image.shape and out.dtype == image.dtype
