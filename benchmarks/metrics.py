@@ -158,18 +158,22 @@ def edit_distance(a: str, b: str) -> int:
     return previous[-1]
 
 
-def ocr_text(image: np.ndarray, language: str = "eng") -> str:
-    """Text recognised by the `tesseract` command; TesseractMissing if it is not installed."""
+def tesseract(image: np.ndarray, language: str = "eng", *options: str) -> str:
+    """What the `tesseract` command prints for `image` (`options` e.g. "tsv");
+    TesseractMissing if it is not installed."""
     binary = shutil.which("tesseract")
     if binary is None:
         raise TesseractMissing("tesseract is not installed (Debian: apt-get install tesseract-ocr)")
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "page.png"
         cv2.imwrite(str(path), image)
-        done = subprocess.run(
-            [binary, str(path), "-", "-l", language], capture_output=True, text=True, check=True
-        )
-    return " ".join(done.stdout.split())
+        command = [binary, str(path), "-", "-l", language, *options]
+        return subprocess.run(command, capture_output=True, text=True, check=True).stdout
+
+
+def ocr_text(image: np.ndarray, language: str = "eng") -> str:
+    """Text recognised by the `tesseract` command; TesseractMissing if it is not installed."""
+    return " ".join(tesseract(image, language).split())
 
 
 def cer(rectified: np.ndarray, reference: np.ndarray | str) -> float:

@@ -18,14 +18,12 @@ from __future__ import annotations
 import argparse
 import json
 import shutil
-import subprocess
-import tempfile
 from pathlib import Path
 
 import cv2
 import numpy as np
 
-from .metrics import TesseractMissing
+from .metrics import tesseract
 
 CONFIDENT = 80.0  # Tesseract word confidence (0-100) counted as read
 MIN_LETTERS = 3  # shorter words are too often noise read as text
@@ -34,17 +32,8 @@ VARIANTS = ("untouched", "rectified", "aligned")
 
 def tesseract_words(image: np.ndarray, upscale: float = 2.0) -> list[tuple[str, float]]:
     """(word, confidence) for each word Tesseract reports in `image` (BGR or gray uint8)."""
-    binary = shutil.which("tesseract")
-    if binary is None:
-        raise TesseractMissing("tesseract is not installed (Debian: apt-get install tesseract-ocr)")
     scaled = cv2.resize(image, None, fx=upscale, fy=upscale, interpolation=cv2.INTER_CUBIC)
-    with tempfile.TemporaryDirectory() as folder:
-        path = Path(folder) / "page.png"
-        cv2.imwrite(str(path), scaled)
-        tsv = subprocess.run(
-            [binary, str(path), "-", "-l", "eng", "tsv"], capture_output=True, text=True, check=True
-        ).stdout
-    return parse_tsv(tsv)
+    return parse_tsv(tesseract(scaled, "eng", "tsv"))
 
 
 def parse_tsv(tsv: str) -> list[tuple[str, float]]:

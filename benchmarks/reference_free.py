@@ -24,11 +24,12 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from doctrpp.runtime.line_alignment import PROFILE_SMOOTHING, ink_mask
+
 from .map_shape import nonprojective_px
 
 SCORE_SIZE = 576  # images are scored at this square size
 BANDS = 8  # vertical bands for projection profiles
-SMOOTHING = np.array([0.25, 0.5, 0.25])  # of the row profile (JPEG noise, antialiasing)
 
 
 def black_share(backward_map: np.ndarray) -> float:
@@ -48,19 +49,13 @@ def kept_share(backward_map: np.ndarray, grid: int = 96) -> float:
     return float(cells.mean())
 
 
-def ink_mask(gray: np.ndarray) -> np.ndarray:
-    """Dark text strokes (float 0/1): darker than the local background by a margin."""
-    background = cv2.medianBlur(gray, 31)
-    return ((background.astype(np.int16) - gray) > 25).astype(np.float32)
-
-
 def _ink(image: np.ndarray) -> np.ndarray:
     gray = image if image.ndim == 2 else cv2.cvtColor(image[:, :, :3], cv2.COLOR_BGR2GRAY)
     return ink_mask(cv2.resize(gray, (SCORE_SIZE, SCORE_SIZE), interpolation=cv2.INTER_AREA))
 
 
 def _profile_contrast(profile: np.ndarray) -> float:
-    profile = np.convolve(profile, SMOOTHING, mode="same")
+    profile = np.convolve(profile, PROFILE_SMOOTHING, mode="same")
     return float(profile.std() / (profile.mean() + 1e-6))
 
 
