@@ -16,6 +16,8 @@ from collections.abc import Iterator
 import cv2
 import numpy as np
 
+from .line_alignment import align_text_lines
+
 STRIP_ROWS = 256  # rows of the full-resolution map held at once
 # Gaussian sigma, in model-grid pixels, for the model's map before it is resized (0: the
 # reference post-processing). Our trained models leave about 1 px of jitter on the 288
@@ -135,6 +137,19 @@ def smooth_backward_map(backward_map: np.ndarray, sigma: float = MAP_SMOOTHING_S
     )
     smoothed = cv2.GaussianBlur(padded, (2 * radius + 1, 2 * radius + 1), sigma)
     return np.ascontiguousarray(smoothed[radius:-radius, radius:-radius])
+
+
+def applied_map(
+    image: np.ndarray,
+    backward_map: np.ndarray,
+    sigma: float = MAP_SMOOTHING_SIGMA,
+    line_alignment: bool = True,
+) -> np.ndarray:
+    """The model's map as the pipeline applies it to `image`: smoothed (`sigma`), then,
+    unless switched off, its rows shifted so that text lines come out level
+    (`line_alignment.align_text_lines`)."""
+    backward_map = smooth_backward_map(backward_map, sigma)
+    return align_text_lines(image, backward_map) if line_alignment else backward_map
 
 
 def photo_map_strips(

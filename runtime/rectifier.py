@@ -12,16 +12,15 @@ import numpy as np
 from doctrpp import contract
 
 from .backends import ModelError, open_backend
-from .line_alignment import align_text_lines
 from .processing import (
     MAP_SMOOTHING_SIGMA,
+    applied_map,
     check_map_smoothing,
     flip_averaged_map,
     mirrored_input,
     model_input,
     photo_map,
     rectify_with_map,
-    smooth_backward_map,
 )
 
 
@@ -110,9 +109,7 @@ class Rectifier:
         timings["inference"] = time.perf_counter() - start
 
         start = time.perf_counter()
-        backward_map = smooth_backward_map(backward_map, self.map_smoothing)
-        if self.line_alignment:
-            backward_map = align_text_lines(image, backward_map)
+        backward_map = applied_map(image, backward_map, self.map_smoothing, self.line_alignment)
         timings["map"] = time.perf_counter() - start
 
         start = time.perf_counter()

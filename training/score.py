@@ -20,8 +20,7 @@ import json
 from pathlib import Path
 
 from doctrpp.export.checkpoint import load_model
-from doctrpp.runtime.line_alignment import align_text_lines
-from doctrpp.runtime.processing import smooth_backward_map
+from doctrpp.runtime.processing import applied_map
 
 from .realcheck import predict as predict_real
 from .realcheck import real_photo_set, score_real
@@ -30,10 +29,7 @@ from .validate import identity_map, predict_maps, score_maps, validation_set
 
 def aligned(items, maps) -> list:
     """The maps as `rectify` post-processes them: smoothed, text lines aligned."""
-    return [
-        align_text_lines(it.image, smooth_backward_map(m))
-        for it, m in zip(items, maps, strict=True)
-    ]
+    return [applied_map(it.image, m) for it, m in zip(items, maps, strict=True)]
 
 
 def score_file(

@@ -21,8 +21,7 @@ import torch
 
 from doctrpp.export.checkpoint import load_model
 from doctrpp.files import write_bytes_atomically
-from doctrpp.runtime.line_alignment import align_text_lines
-from doctrpp.runtime.processing import rectify_with_map, smooth_backward_map
+from doctrpp.runtime.processing import applied_map, rectify_with_map
 
 from .realcheck import predict, real_photo_set
 
@@ -70,9 +69,11 @@ def sheet(
         else:
             with torch.no_grad():
                 model = load_model(path).eval()
-                maps = [smooth_backward_map(m) for m in predict(model, items, flip_average=flip)]
-            if align:
-                maps = [align_text_lines(it.image, m) for it, m in zip(items, maps, strict=True)]
+                raw = predict(model, items, flip_average=flip)
+            maps = [
+                applied_map(it.image, m, line_alignment=align)
+                for it, m in zip(items, raw, strict=True)
+            ]
         column = []
         for item, backward_map in zip(items, maps, strict=True):
             rectified = rectify_with_map(item.image, backward_map)
