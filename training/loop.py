@@ -22,10 +22,9 @@ from doctrpp.files import write_bytes_atomically
 
 from .data import FolderCrops, GeneratedCrops, StreamSampler, reuse_window
 from .losses import map_loss
-from .realcheck import predict as predict_real
-from .realcheck import real_photo_set, score_real
+from .realcheck import real_photo_set, validation_scores
 from .runlog import RunLog
-from .validate import identity_map, identity_scores, predict_maps, score_maps, validation_set
+from .validate import validation_set
 
 
 @dataclass(frozen=True)
@@ -234,9 +233,7 @@ def train(s: TrainSettings) -> dict:
         real_items = real_photo_set(s.real_photos, s.real_photos_count)
     log = RunLog(s.out) if env.main else None
     if env.main and not (s.out / "validation.jsonl").exists():
-        baseline = identity_scores(validation)
-        if real_items:
-            baseline.update(score_real(real_items, [identity_map()] * len(real_items)))
+        baseline = validation_scores(None, validation, real_items)
         log.validation({"step": 0, "identity": True, **baseline})
         print("identity baseline:", json.dumps({k: round(v, 3) for k, v in baseline.items()}))
 
@@ -274,10 +271,7 @@ def train(s: TrainSettings) -> dict:
         }
 
     def run_validation() -> None:
-        maps = predict_maps(model, validation, autocast_dtype=autocast_dtype)
-        scores = score_maps(validation, maps)
-        if real_items:
-            scores.update(score_real(real_items, predict_real(model, real_items)))
+        scores = validation_scores(model, validation, real_items, autocast_dtype)
         record = {
             "step": state["step"],
             "samples_seen": state["samples_seen"],

@@ -52,6 +52,8 @@ def training_record(checkpoint: dict, run_dir: Path, note: str) -> dict:
         "wall_hours": round(state["wall_seconds"] / 3600, 3),
         "date": datetime.date.today().isoformat(),
         "note": note,
+        # weights averaged from these steps' checkpoints (`training.average`)
+        **({"averaged_from": state["averaged_from"]} if "averaged_from" in state else {}),
         **validation_at(run_dir, state["step"]),
     }
 

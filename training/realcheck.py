@@ -26,7 +26,7 @@ from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
 from doctrpp.runtime.processing import model_input, rectify_with_map
 from doctrpp.udir.photos import crops_of_each_kind, spread
 
-from .validate import batch_maps
+from .validate import batch_maps, identity_map, predict_maps, score_maps
 
 
 @dataclass
@@ -81,3 +81,23 @@ def score_real(items: list[RealItem], maps: list[np.ndarray]) -> dict[str, float
         for kind, kind_rows in rows.items()
         for metric, value in summarise(kind_rows).items()
     }
+
+
+def validation_scores(
+    model: torch.nn.Module | None,
+    validation: list,
+    real_items: list[RealItem],
+    autocast_dtype: torch.dtype | None = None,
+) -> dict[str, float]:
+    """What a training validation logs: the generated set's scores and, with real items,
+    the real-photo check's, of the model's raw maps (None: the identity map)."""
+    if model is None:
+        maps = [identity_map()] * len(validation)
+        real_maps = [identity_map()] * len(real_items)
+    else:
+        maps = predict_maps(model, validation, autocast_dtype=autocast_dtype)
+        real_maps = predict(model, real_items) if real_items else []
+    scores = score_maps(validation, maps)
+    if real_items:
+        scores.update(score_real(real_items, real_maps))
+    return scores
