@@ -4,8 +4,9 @@ usage: python -m doctrpp.training.average CHECKPOINT... --out RUN_DIR
        [--ancestor CHECKPOINT]... [--real-photos DIR] [--real-photos-count 32]
 
 Cycle ends that grew from one start (two cycles from the same weights, or a cycle and its
-continuation) lie in one basin of the loss; the mean of their weights predicts better than
-either alone (MODEL_CARD.md, "Weight averaging"). Writes RUN_DIR/snapshots/stepN.pt
+continuation) lie in one basin of the loss, where the mean of their weights can predict
+better than either alone (measured on ours: a gain within the noise, MODEL_CARD.md,
+"Weight averaging"). Writes RUN_DIR/snapshots/stepN.pt
 (weights, config, training state; N = the step of the source trained longest) and
 RUN_DIR/validation.jsonl (the identity baseline and the average's scores, as the trainer
 logs them), so `training.choose`, `training.score` and `training.publish` take it like a

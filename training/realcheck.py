@@ -23,7 +23,7 @@ from doctrpp.benchmarks.reference_free import (
     summarise,
 )
 from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
-from doctrpp.runtime.processing import model_input, rectify_with_map
+from doctrpp.runtime.processing import applied_map, model_input, rectify_with_map
 from doctrpp.udir.photos import crops_of_each_kind, spread
 
 from .validate import batch_maps, identity_map, predict_maps, score_maps
@@ -88,16 +88,29 @@ def validation_scores(
     validation: list,
     real_items: list[RealItem],
     autocast_dtype: torch.dtype | None = None,
+    flip_average: bool = False,
+    line_alignment: bool = False,
 ) -> dict[str, float]:
-    """What a training validation logs: the generated set's scores and, with real items,
-    the real-photo check's, of the model's raw maps (None: the identity map)."""
+    """The generated set's scores and, with real items, the real-photo check's, of the
+    model's maps (None: the identity map). Raw maps, as a training validation logs them,
+    unless `flip_average` and `line_alignment` ask for the runtime's steps (the latter
+    also smooths, as `rectify` does)."""
     if model is None:
         maps = [identity_map()] * len(validation)
         real_maps = [identity_map()] * len(real_items)
     else:
-        maps = predict_maps(model, validation, autocast_dtype=autocast_dtype)
-        real_maps = predict(model, real_items) if real_items else []
+        maps = predict_maps(
+            model, validation, autocast_dtype=autocast_dtype, flip_average=flip_average
+        )
+        real_maps = predict(model, real_items, flip_average=flip_average) if real_items else []
+        if line_alignment:
+            maps, real_maps = _as_applied(validation, maps), _as_applied(real_items, real_maps)
     scores = score_maps(validation, maps)
     if real_items:
         scores.update(score_real(real_items, real_maps))
     return scores
+
+
+def _as_applied(items: list, maps: list[np.ndarray]) -> list[np.ndarray]:
+    """The maps as `rectify` post-processes them: smoothed, text lines aligned."""
+    return [applied_map(it.image, m) for it, m in zip(items, maps, strict=True)]

@@ -20,16 +20,9 @@ import json
 from pathlib import Path
 
 from doctrpp.export.checkpoint import load_model
-from doctrpp.runtime.processing import applied_map
 
-from .realcheck import predict as predict_real
-from .realcheck import real_photo_set, score_real
-from .validate import identity_map, predict_maps, score_maps, validation_set
-
-
-def aligned(items, maps) -> list:
-    """The maps as `rectify` post-processes them: smoothed, text lines aligned."""
-    return [applied_map(it.image, m) for it, m in zip(items, maps, strict=True)]
+from .realcheck import real_photo_set, score_real, validation_scores
+from .validate import score_maps, validation_set
 
 
 def score_file(
@@ -39,18 +32,14 @@ def score_file(
     flip_average: bool = False,
     line_alignment: bool = False,
 ) -> dict:
-    if path is None:
-        maps = [identity_map()] * len(validation)
-        real_maps = [identity_map()] * len(real_items)
-    else:
-        model = load_model(path).eval()
-        maps = predict_maps(model, validation, flip_average=flip_average)
-        real_maps = predict_real(model, real_items, flip_average=flip_average) if real_items else []
-        if line_alignment:
-            maps, real_maps = aligned(validation, maps), aligned(real_items, real_maps)
-    scores = score_maps(validation, maps)
-    if real_items:
-        scores.update(score_real(real_items, real_maps))
+    model = load_model(path).eval() if path else None
+    scores = validation_scores(
+        model,
+        validation,
+        real_items,
+        flip_average=flip_average,
+        line_alignment=line_alignment,
+    )
     return {"weights": str(path) if path else "identity", **scores}
 
 
