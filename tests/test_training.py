@@ -267,6 +267,35 @@ def test_sigterm_to_the_process_group_checkpoints_cleanly(tmp_path):
     assert state["step"] >= 1
 
 
+def test_an_error_in_the_trainer_exits_instead_of_hanging_on_its_workers(tmp_path):
+    """Data workers ignore SIGTERM (above), so the trainer must stop them itself also when
+    it fails: left to the interpreter's exit, they kept a crashed run alive for good."""
+    import subprocess
+    import sys
+
+    script = (
+        "import sys\n"
+        "from pathlib import Path\n"
+        "from doctrpp.export.config import TINY\n"
+        "from doctrpp.training import runlog\n"
+        "from doctrpp.training.loop import TrainSettings, train\n"
+        "def fail(self, record):\n"
+        "    if not record.get('identity'):\n"
+        "        raise OSError('disk gone')\n"
+        "runlog.RunLog.validation = fail\n"
+        "train(TrainSettings(out=Path(sys.argv[1]), config=TINY, steps=4, batch=1, workers=1,\n"
+        "                    threads=1, validate_every=2, validation_size=3))\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script, str(tmp_path / "run")],
+        capture_output=True,
+        text=True,
+        timeout=300,  # the hang this guards against lasted forever
+    )
+    assert done.returncode != 0
+    assert "disk gone" in done.stderr
+
+
 def quick_settings(out, **changes) -> TrainSettings:
     """A few steps of the tiny config on generated crops, validating at the end."""
     base = dict(

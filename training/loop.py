@@ -100,6 +100,19 @@ def _leave_stopping_to_the_trainer(_worker_id: int) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+def _stop_workers(batches) -> None:
+    """Shut the loader's workers down now. Left to garbage collection after an error (the
+    traceback keeps the iterator alive), multiprocessing's exit handler would `terminate`
+    them, which they ignore (`_leave_stopping_to_the_trainer`), and wait for them forever."""
+    shutdown = getattr(batches, "_shutdown_workers", None)  # torch's own orderly shutdown
+    if shutdown is not None:
+        shutdown()
+    for worker in getattr(batches, "_workers", []):
+        if worker.is_alive():
+            worker.kill()
+            worker.join(timeout=10)
+
+
 def carried_state(weights: dict) -> dict:
     """Step, stream position and hours carried by a weights-only file, so totals accumulate
     and the generated stream continues where that training stopped (no repeated samples)."""
@@ -295,52 +308,55 @@ def train(s: TrainSettings) -> dict:
     last_time = time.time()
     first_step = state["step"]
     batches = iter(loader)
-    schedule_end = state.get("schedule_start", 0) + s.steps
-    last_step = min(schedule_end, s.stop_at or schedule_end)
-    while state["step"] < last_step and not stop["now"]:
-        images, targets = next(batches)
-        images, targets = images.to(env.device), targets.to(env.device)
-        with torch.autocast(env.device.type, dtype=torch.bfloat16, enabled=s.bf16):
-            predicted = net(images)
-        loss = map_loss(predicted.float(), targets, s.gradient_loss)
-        optimiser.zero_grad(set_to_none=True)
-        loss.backward()
-        optimiser.step()
-        schedule.step()
-        state["step"] += 1
-        state["samples_seen"] += per_step
-        state["generated_samples"] += per_step / (1 if s.data_folder else s.sample_reuse)
-        if env.main:
-            now = time.time()
-            log.step(
-                state["step"],
-                loss.item(),
-                schedule.get_last_lr()[0],
-                per_step / max(now - last_time, 1e-9),
-                now - started,
-            )
-            last_time = now
-            if state["step"] % 10 == 0 or state["step"] == 1:
-                elapsed = now - started
-                done = state["step"] - first_step
-                eta = elapsed / max(done, 1) * (last_step - state["step"])
-                print(
-                    f"step {state['step']}/{last_step} loss {loss.item():.3f} px "
-                    f"lr {schedule.get_last_lr()[0]:.2e} {done * per_step / elapsed:.2f} "
-                    f"samples/s eta {eta / 60:.0f} min",
-                    flush=True,
+    try:
+        schedule_end = state.get("schedule_start", 0) + s.steps
+        last_step = min(schedule_end, s.stop_at or schedule_end)
+        while state["step"] < last_step and not stop["now"]:
+            images, targets = next(batches)
+            images, targets = images.to(env.device), targets.to(env.device)
+            with torch.autocast(env.device.type, dtype=torch.bfloat16, enabled=s.bf16):
+                predicted = net(images)
+            loss = map_loss(predicted.float(), targets, s.gradient_loss)
+            optimiser.zero_grad(set_to_none=True)
+            loss.backward()
+            optimiser.step()
+            schedule.step()
+            state["step"] += 1
+            state["samples_seen"] += per_step
+            state["generated_samples"] += per_step / (1 if s.data_folder else s.sample_reuse)
+            if env.main:
+                now = time.time()
+                log.step(
+                    state["step"],
+                    loss.item(),
+                    schedule.get_last_lr()[0],
+                    per_step / max(now - last_time, 1e-9),
+                    now - started,
                 )
-            if state["step"] % s.checkpoint_every == 0:
-                save_checkpoint(s.out / "last.pth", payload())
-            if state["step"] % s.validate_every == 0:
+                last_time = now
+                if state["step"] % 10 == 0 or state["step"] == 1:
+                    elapsed = now - started
+                    done = state["step"] - first_step
+                    eta = elapsed / max(done, 1) * (last_step - state["step"])
+                    print(
+                        f"step {state['step']}/{last_step} loss {loss.item():.3f} px "
+                        f"lr {schedule.get_last_lr()[0]:.2e} {done * per_step / elapsed:.2f} "
+                        f"samples/s eta {eta / 60:.0f} min",
+                        flush=True,
+                    )
+                if state["step"] % s.checkpoint_every == 0:
+                    save_checkpoint(s.out / "last.pth", payload())
+                if state["step"] % s.validate_every == 0:
+                    run_validation()
+            if s.max_minutes and time.time() - started > 60 * s.max_minutes:
+                stop["now"] = True
+        if env.main:
+            save_checkpoint(s.out / "last.pth", payload())
+            if state["step"] % s.validate_every:
                 run_validation()
-        if s.max_minutes and time.time() - started > 60 * s.max_minutes:
-            stop["now"] = True
-    if env.main:
-        save_checkpoint(s.out / "last.pth", payload())
-        if state["step"] % s.validate_every:
-            run_validation()
-    for sig, handler in previous_handlers.items():
-        signal.signal(sig, handler)
+    finally:  # also on an error: a worker left running would keep the process alive
+        _stop_workers(batches)
+        for sig, handler in previous_handlers.items():
+            signal.signal(sig, handler)
     env.close()
     return dict(state)
