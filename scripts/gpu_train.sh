@@ -21,7 +21,7 @@ if ! python3 -c "import doctrpp" 2>/dev/null; then
 fi
 python3 -m doctrpp train --out "$run" --config mid --init training/resume/mid.pt \
     --device "${DEVICE:-cuda}" --batch 32 --lr 3e-4 --steps "${STEPS:-1600}" \
-    --sample-reuse 2 --gradient-loss 1 --validate-every 400 --max-minutes "$minutes" 2>&1 | tee "$out/train.log"
+    --sample-reuse 2 --gradient-loss 2 --validate-every 400 --max-minutes "$minutes" 2>&1 | tee "$out/train.log"
 cp "$run/validation.jsonl" "$out/"
 last=$(ls "$run"/snapshots/step*.pt | tail -n 1)
 cp "$last" "$out/mid.pt"
