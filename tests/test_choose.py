@@ -49,3 +49,15 @@ def test_shortlist_keeps_near_lowest_error_orders_by_coherence(tmp_path, capsys)
 def test_missing_run_is_a_clear_error(tmp_path, capsys):
     assert main([str(tmp_path / "nope")]) == 2
     assert "no such file" in capsys.readouterr().err
+
+
+def test_rescore_commands_compare_with_the_shipped_default(tmp_path, capsys):
+    run_dir = _run(tmp_path, [_record(250, 12.0, 1.10)])
+    (run_dir / "snapshots").mkdir()
+    (run_dir / "snapshots" / "step0000250.pt").write_bytes(b"")
+    assert main([str(run_dir)]) == 0
+    commands = [line for line in capsys.readouterr().out.splitlines() if "training.score" in line]
+    assert len(commands) == 2
+    for command in commands:
+        assert "step0000250.pt export/weights/doctrpp_default.pt" in command
+    assert commands[1].endswith("--flip-average --line-alignment")

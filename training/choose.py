@@ -6,7 +6,8 @@ The rule: among validations whose real-photo black share is at most --max-black 
 kind, keep those within --margin px of the lowest generated map error (all kinds), then
 order them by mean real coherence. Coherence from the in-loop check is noisy (16-32
 photos), so the shortlist is re-scored on 48 photos with `python -m
-doctrpp.training.score` before anything is published; this prints that command.
+doctrpp.training.score`, beside the shipped default, before anything is published; this
+prints those commands (raw maps, and as `rectify` runs them).
 """
 
 from __future__ import annotations
@@ -102,13 +103,22 @@ def main(argv: list[str] | None = None) -> int:
         print("error: no validation with real black share within --max-black", file=sys.stderr)
         return 1
     print(markdown_table(chosen, untouched))
-    snapshots = " ".join(str(c.snapshot) for c in chosen if c.snapshot.is_file())
+    snapshots = [str(c.snapshot) for c in chosen if c.snapshot.is_file()]
     if snapshots:
-        print(
-            f"\nre-score: python -m doctrpp.training.score {snapshots} "
-            "--real-photos ../shared/realphotos/docunet_dev --photos 48"
-        )
+        print("\n" + rescore_commands(snapshots))
     return 0
+
+
+def rescore_commands(snapshots: list[str]) -> str:
+    """The two re-scorings the rule asks for, beside the shipped default (a snapshot ships
+    only if it beats it): raw maps (the rule's coherence) and as `rectify` runs them."""
+    weights = " ".join([*snapshots, "export/weights/doctrpp_default.pt"])
+    command = (
+        f"python -m doctrpp.training.score {weights} "
+        "--real-photos ../shared/realphotos/docunet_dev --photos 48"
+    )
+    pipeline = f"{command} --flip-average --line-alignment"
+    return f"re-score, raw: {command}\nas rectify runs them: {pipeline}"
 
 
 if __name__ == "__main__":
