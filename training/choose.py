@@ -17,6 +17,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+from doctrpp.export.default_weights import DEFAULT_NAME
 from doctrpp.udir.scene import KINDS
 
 from .runlog import read_validation
@@ -112,7 +113,7 @@ def main(argv: list[str] | None = None) -> int:
 def rescore_commands(snapshots: list[str]) -> str:
     """The two re-scorings the rule asks for, beside the shipped default (a snapshot ships
     only if it beats it): raw maps (the rule's coherence) and as `rectify` runs them."""
-    weights = " ".join([*snapshots, "export/weights/doctrpp_default.pt"])
+    weights = " ".join([*snapshots, f"export/weights/{DEFAULT_NAME}"])
     command = (
         f"python -m doctrpp.training.score {weights} "
         "--real-photos ../shared/realphotos/docunet_dev --photos 48"
