@@ -58,6 +58,8 @@ def test_rescore_commands_compare_with_the_shipped_default(tmp_path, capsys):
     assert main([str(run_dir)]) == 0
     commands = [line for line in capsys.readouterr().out.splitlines() if "training.score" in line]
     assert len(commands) == 2
-    for command in commands:
-        assert "step0000250.pt export/weights/doctrpp_default.pt" in command
+    for command in commands:  # the default first: the paired lines compare with it
+        assert "export/weights/doctrpp_default.pt " in command and "step0000250.pt" in command
+        assert command.index("doctrpp_default.pt") < command.index("step0000250.pt")
+        assert "--validation-start 48 --validation-size 192" in command
     assert commands[1].endswith("--flip-average --line-alignment")

@@ -5,9 +5,10 @@ usage: python -m doctrpp.training.choose RUN_DIR [RUN_DIR ...] [--margin 0.3] [-
 The rule: among validations whose real-photo black share is at most --max-black on every
 kind, keep those within --margin px of the lowest generated map error (all kinds), then
 order them by mean real coherence. Coherence from the in-loop check is noisy (16-32
-photos), so the shortlist is re-scored on 48 photos with `python -m
-doctrpp.training.score`, beside the shipped default, before anything is published; this
-prints those commands (raw maps, and as `rectify` runs them).
+photos) and the map error was the ground the shortlist was chosen on, so the shortlist is
+re-scored with `python -m doctrpp.training.score` on 48 photos and on 192 fresh generated
+crops (48-239 of the validation stream), against the shipped default crop by crop, before
+anything is published; this prints those commands (raw maps, and as `rectify` runs them).
 """
 
 from __future__ import annotations
@@ -21,6 +22,9 @@ from doctrpp.export.default_weights import DEFAULT_NAME
 from doctrpp.udir.scene import KINDS
 
 from .runlog import read_validation
+
+# Validation crops no snapshot was chosen on: the trainer's check uses the first 48.
+FRESH_START, FRESH_COUNT = 48, 192
 
 
 @dataclass(frozen=True)
@@ -111,12 +115,14 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def rescore_commands(snapshots: list[str]) -> str:
-    """The two re-scorings the rule asks for, beside the shipped default (a snapshot ships
-    only if it beats it): raw maps (the rule's coherence) and as `rectify` runs them."""
-    weights = " ".join([*snapshots, f"export/weights/{DEFAULT_NAME}"])
+    """The two re-scorings the rule asks for, the shipped default first so that each
+    snapshot is compared with it crop by crop (a snapshot ships only if it beats it): raw
+    maps (the rule's coherence) and as `rectify` runs them, on fresh generated crops."""
+    weights = " ".join([f"export/weights/{DEFAULT_NAME}", *snapshots])
     command = (
         f"python -m doctrpp.training.score {weights} "
-        "--real-photos ../shared/realphotos/docunet_dev --photos 48"
+        "--real-photos ../shared/realphotos/docunet_dev --photos 48 "
+        f"--validation-start {FRESH_START} --validation-size {FRESH_COUNT}"
     )
     pipeline = f"{command} --flip-average --line-alignment"
     return f"re-score, raw: {command}\nas rectify runs them: {pipeline}"

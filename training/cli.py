@@ -20,7 +20,10 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "validation.jsonl. Several GPUs/nodes: torchrun --nproc_per_node N -m doctrpp train ...",
     )
     p.add_argument("--out", type=Path, required=True, help="run folder (created)")
-    p.add_argument("--config", default="reference", help="model config preset (default reference)")
+    p.add_argument(
+        "--config",
+        help="model config preset (default: the --init file's config, else reference)",
+    )
     p.add_argument("--steps", type=int, default=100_000, help="length of the lr schedule")
     p.add_argument("--stop-at", type=int, help="stop after this step (schedule keeps --steps)")
     p.add_argument("--batch", type=int, default=12, help="batch per process (default 12)")
@@ -123,27 +126,49 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=run)
 
 
+def _model_config(name: str | None, flag: str, start: Path | None):
+    """The preset `name`; without one, the config the starting file (`--init` or
+    `--resume`) records, e.g. a grown model's (`training.grow`), else the reference. A preset
+    that differs from the starting file's is refused in one line."""
+    from doctrpp.export.checkpoint import CheckpointError, read_checkpoint
+    from doctrpp.export.config import REFERENCE, config_by_name
+
+    recorded = None
+    if start:
+        if not start.is_file():
+            raise CliError(f"{flag} {start}: no such file")
+        try:
+            recorded = read_checkpoint(start)[1]
+        except CheckpointError as exc:
+            raise CliError(f"{flag} {start}: {exc}") from None
+    if name is None:
+        return recorded or REFERENCE
+    try:
+        config = config_by_name(name)
+    except ValueError as exc:
+        raise CliError(str(exc)) from None
+    if recorded and recorded != config:
+        raise CliError(
+            f"{flag} {start} holds a model of another config ({recorded.to_json()}) than "
+            f"--config {name}; leave --config out to train the file's own"
+        )
+    return config
+
+
 def run(args: argparse.Namespace) -> int:
     require("torch", extra="export")
-    from doctrpp.export.config import config_by_name
 
     from .loop import TrainSettings, train
 
-    try:
-        config = config_by_name(args.config)
-    except ValueError as exc:
-        raise CliError(str(exc)) from None
-    if args.resume and not args.resume.is_file():
-        raise CliError(f"--resume {args.resume}: no such file")
+    if args.init and args.resume:
+        raise CliError("--init and --resume exclude each other (--resume keeps the optimiser)")
+    flag, start = ("--init", args.init) if args.init else ("--resume", args.resume)
+    config = _model_config(args.config, flag, start)
     if args.device == "cuda":
         import torch
 
         if not torch.cuda.is_available():
             raise CliError("--device cuda: torch sees no CUDA GPU on this machine")
-    if args.init and args.resume:
-        raise CliError("--init and --resume exclude each other (--resume keeps the optimiser)")
-    if args.init and not args.init.is_file():
-        raise CliError(f"--init {args.init}: no such file")
     if args.complete_first < 0:
         raise CliError("--complete-first must be >= 0")
     if args.data and (args.kind != "mixed" or args.complete_first):

@@ -284,7 +284,7 @@ def train(s: TrainSettings) -> dict:
         }
 
     def run_validation() -> None:
-        scores = validation_scores(model, validation, real_items, autocast_dtype)
+        scores = validation_scores(model, validation, real_items, autocast_dtype=autocast_dtype)
         record = {
             "step": state["step"],
             "samples_seen": state["samples_seen"],

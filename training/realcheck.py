@@ -83,32 +83,47 @@ def score_real(items: list[RealItem], maps: list[np.ndarray]) -> dict[str, float
     }
 
 
-def validation_scores(
+def validation_maps(
     model: torch.nn.Module | None,
     validation: list,
     real_items: list[RealItem],
     autocast_dtype: torch.dtype | None = None,
     flip_average: bool = False,
     line_alignment: bool = False,
-) -> dict[str, float]:
-    """The generated set's scores and, with real items, the real-photo check's, of the
-    model's maps (None: the identity map). Raw maps, as a training validation logs them,
-    unless `flip_average` and `line_alignment` ask for the runtime's steps (the latter
-    also smooths, as `rectify` does)."""
+) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """The model's maps (None: the identity map) of the generated set and the real items.
+    Raw maps, as a training validation logs them, unless `flip_average` and
+    `line_alignment` ask for the runtime's steps (the latter also smooths, as `rectify`
+    does)."""
     if model is None:
-        maps = [identity_map()] * len(validation)
-        real_maps = [identity_map()] * len(real_items)
-    else:
-        maps = predict_maps(
-            model, validation, autocast_dtype=autocast_dtype, flip_average=flip_average
-        )
-        real_maps = predict(model, real_items, flip_average=flip_average) if real_items else []
-        if line_alignment:
-            maps, real_maps = _as_applied(validation, maps), _as_applied(real_items, real_maps)
+        return [identity_map()] * len(validation), [identity_map()] * len(real_items)
+    maps = predict_maps(model, validation, autocast_dtype=autocast_dtype, flip_average=flip_average)
+    real_maps = predict(model, real_items, flip_average=flip_average) if real_items else []
+    if line_alignment:
+        maps, real_maps = _as_applied(validation, maps), _as_applied(real_items, real_maps)
+    return maps, real_maps
+
+
+def scores_of_maps(
+    validation: list,
+    maps: list[np.ndarray],
+    real_items: list[RealItem],
+    real_maps: list[np.ndarray],
+) -> dict[str, float]:
+    """The generated set's scores and, with real items, the real-photo check's."""
     scores = score_maps(validation, maps)
     if real_items:
         scores.update(score_real(real_items, real_maps))
     return scores
+
+
+def validation_scores(
+    model: torch.nn.Module | None, validation: list, real_items: list[RealItem], **options
+) -> dict[str, float]:
+    """`scores_of_maps` of `validation_maps` (`options`: its autocast_dtype, flip_average
+    and line_alignment)."""
+    maps, real_maps = validation_maps(model, validation, real_items, **options)
+    return scores_of_maps(validation, maps, real_items, real_maps)
 
 
 def _as_applied(items: list, maps: list[np.ndarray]) -> list[np.ndarray]:

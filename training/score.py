@@ -2,6 +2,7 @@
 
 usage: python -m doctrpp.training.score WEIGHTS... [--real-photos DIR] [--photos 16]
        [--peer uvdoc] [--flip-average] [--line-alignment] [--crop-size 288]
+       [--validation-start 0] [--validation-size 48]
 
 Prints one JSON line per file (map error and MS-SSIM-M per kind, and with --real-photos
 the reference-free scores per kind), the identity map first as the baseline, and with
@@ -11,6 +12,13 @@ the training loop's check) unless `--flip-average` asks for the runtime's defaul
 `--line-alignment` then smooths each map and aligns its text lines as `rectify` does, so
 `--flip-average --line-alignment` scores the whole default pipeline. `--crop-size` renders
 the generated crops larger (text that a 288 crop blurs away; the maps stay 288).
+
+With two or more weights files, one more line per file after the first compares it with
+the first on the same crops: the mean difference of map error per kind and its standard
+error (`paired_map_error_px/KIND`: [mean, standard error]; below zero is better). The
+trainer chooses snapshots on crops 0-47, so compare the chosen ones on fresh crops
+(`--validation-start 48 --validation-size 192`) before one ships: a lead won on the
+crops it was chosen by partly comes from that choice.
 """
 
 from __future__ import annotations
@@ -21,8 +29,8 @@ from pathlib import Path
 
 from doctrpp.export.checkpoint import load_model
 
-from .realcheck import real_photo_set, score_real, validation_scores
-from .validate import score_maps, validation_set
+from .realcheck import real_photo_set, score_real, scores_of_maps, validation_maps
+from .validate import crop_map_errors, paired_difference, score_maps, validation_set
 
 
 def score_file(
@@ -31,16 +39,32 @@ def score_file(
     real_items,
     flip_average: bool = False,
     line_alignment: bool = False,
-) -> dict:
+) -> tuple[dict, list[float]]:
+    """The file's scores (None: the identity map) and each generated crop's map error."""
     model = load_model(path).eval() if path else None
-    scores = validation_scores(
+    maps, real_maps = validation_maps(
         model,
         validation,
         real_items,
         flip_average=flip_average,
         line_alignment=line_alignment,
     )
-    return {"weights": str(path) if path else "identity", **scores}
+    scores = scores_of_maps(validation, maps, real_items, real_maps)
+    record = {"weights": str(path) if path else "identity", **scores}
+    return record, crop_map_errors(validation, maps)
+
+
+def paired_line(reference: Path, path: Path, kinds: list[str], errors: dict) -> dict:
+    """`path` against `reference` on the same crops (`validate.paired_difference`)."""
+    pairs = paired_difference(kinds, errors[reference], errors[path])
+    return {
+        "weights": str(path),
+        "paired_against": str(reference),
+        **{
+            f"paired_map_error_px/{kind}": [round(m, 4), round(e, 4)]
+            for kind, (m, e) in pairs.items()
+        },
+    }
 
 
 def score_uvdoc(validation, real_items) -> dict:
@@ -64,7 +88,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("weights", type=Path, nargs="+", help="weights or checkpoint files")
     parser.add_argument("--real-photos", type=Path, help="folder of real photos")
     parser.add_argument("--photos", type=int, default=16, help="real photos used")
-    parser.add_argument("--validation-size", type=int, default=48)
+    parser.add_argument("--validation-size", type=int, default=48, help="generated crops")
+    parser.add_argument(
+        "--validation-start",
+        type=int,
+        default=0,
+        help="first crop of the validation stream (the trainer checks 0-47; 48 on are fresh)",
+    )
     parser.add_argument("--peer", choices=["uvdoc"], help="also score a peer model")
     parser.add_argument(
         "--flip-average",
@@ -83,11 +113,22 @@ def main(argv: list[str] | None = None) -> int:
         help="px of the generated validation crops (their maps stay 288)",
     )
     args = parser.parse_args(argv)
-    validation = validation_set(args.validation_size, args.crop_size)
+    if args.validation_size < 1 or args.validation_start < 0:
+        parser.error("--validation-size must be >= 1 and --validation-start >= 0")
+    missing = [str(p) for p in args.weights if not p.is_file()]
+    if missing:
+        parser.error(f"no such weights file: {', '.join(missing)}")
+    validation = validation_set(args.validation_size, args.crop_size, args.validation_start)
     real_items = real_photo_set(args.real_photos, args.photos) if args.real_photos else []
+    errors = {}
     for path in [None, *args.weights]:
-        scores = score_file(path, validation, real_items, args.flip_average, args.line_alignment)
+        scores, errors[path] = score_file(
+            path, validation, real_items, args.flip_average, args.line_alignment
+        )
         print(json.dumps(scores), flush=True)
+    kinds = [item.kind for item in validation]
+    for path in args.weights[1:]:
+        print(json.dumps(paired_line(args.weights[0], path, kinds, errors)), flush=True)
     if args.peer:
         print(json.dumps(score_uvdoc(validation, real_items)), flush=True)
     return 0

@@ -1,16 +1,18 @@
 """Training-step cost per config and variant, measured as ratios in one process.
 
-usage: python -m doctrpp.training.throughput [--configs tiny mid] [--batch 8] [--rounds 5]
+usage: python -m doctrpp.training.throughput [--configs tiny mid FILE.pt] [--batch 8] [--rounds 5]
        [--variants fp32 bf16 bf16+channels-last bf16+compile] [--threads 1] [--out T.json]
 
-Each variant is one forward + backward + AdamW step on random inputs (data excluded: its
-cost is the generator's, measured by `doctrpp crops`), timed in CPU seconds of this process
-(`time.process_time`, so other load on a shared machine matters less than wall time),
-interleaved round by round, median over rounds. `compile` is torch.compile (inductor); its
-one-off compile time is reported apart. `channels-last` and `compile` are offered but not
-run by default: with torch 2.13.0 on this CPU our model's first training step aborts the
-process with heap corruption in both ("double free or corruption", "free(): invalid next
-size"; each variant alone in a fresh process; a plain conv in channels-last is fine).
+A config is a preset's name or a weights file that records one (a grown model,
+`training.grow`). Each variant is one forward + backward + AdamW step on random inputs (data
+excluded: its cost is the generator's, measured by `doctrpp crops`), timed in CPU seconds of
+this process (`time.process_time`, so other load on a shared machine matters less than wall
+time), interleaved round by round, median over rounds. `compile` is torch.compile
+(inductor); its one-off compile time is reported apart. `channels-last` and `compile` are
+offered but not run by default: with torch 2.13.0 on this CPU our model's first training
+step aborts the process with heap corruption in both ("double free or corruption", "free():
+invalid next size"; each variant alone in a fresh process; a plain conv in channels-last is
+fine).
 """
 
 from __future__ import annotations
@@ -23,7 +25,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from doctrpp.export.config import config_by_name
+from doctrpp.export.checkpoint import read_checkpoint
+from doctrpp.export.config import ModelConfig, config_by_name
 from doctrpp.export.model import DocTrPP
 from doctrpp.files import write_bytes_atomically
 from doctrpp.training.losses import map_l1
@@ -32,10 +35,20 @@ VARIANTS = ("fp32", "bf16", "bf16+channels-last", "bf16+compile")
 DEFAULT_VARIANTS = ("fp32", "bf16")
 
 
+def model_config(name: str) -> ModelConfig:
+    """A preset by name, or the config a weights file records."""
+    if Path(name).is_file():
+        recorded = read_checkpoint(name)[1]
+        if recorded is None:
+            raise ValueError(f"{name} records no model config")
+        return recorded
+    return config_by_name(name)
+
+
 def make_step(config: str, variant: str, batch: int, seed: int = 0):
     """A closure running one training step; returns (step, setup CPU seconds)."""
     torch.manual_seed(seed)
-    model = DocTrPP(config_by_name(config)).train()
+    model = DocTrPP(model_config(config)).train()
     images = torch.rand(batch, 3, 288, 288)
     targets = torch.rand(batch, 2, 288, 288) * 287
     if "channels-last" in variant:

@@ -24,10 +24,17 @@ class ValidationItem:
     backward_map: np.ndarray  # (288, 288, 2) normalised
 
 
-def validation_set(count: int = 48, size: int = contract.INPUT_SIZE) -> list[ValidationItem]:
-    """The fixed validation crops; `size` renders them larger (their maps stay 288)."""
+def validation_set(
+    count: int = 48, size: int = contract.INPUT_SIZE, start: int = 0
+) -> list[ValidationItem]:
+    """Crops `start` to `start + count - 1` of the fixed validation stream (the trainer's
+    check uses the first 48); `size` renders them larger (their maps stay 288)."""
+    if count < 1 or start < 0:
+        raise ValueError(
+            f"validation crops: count must be >= 1 and start >= 0, not {count}, {start}"
+        )
     items = []
-    for i in range(count):
+    for i in range(start, start + count):
         sample = generate(VALIDATION_SEED_OFFSET + i, kind_for_index(i), size=size)
         items.append(ValidationItem(sample.kind, sample.image, sample.backward_map))
     return items
@@ -63,6 +70,26 @@ def score_maps(items: list[ValidationItem], predicted: list[np.ndarray]) -> dict
         scores[f"ms_ssim/{kind}"] = float(mean[4])
         scores[f"local_distortion/{kind}"] = float(mean[5])
     return scores
+
+
+def crop_map_errors(items: list[ValidationItem], predicted: list[np.ndarray]) -> list[float]:
+    """Each crop's mean map error, px of the 288 grid."""
+    return [map_drift(bm, it.backward_map).mean_px for it, bm in zip(items, predicted, strict=True)]
+
+
+def paired_difference(
+    kinds: list[str], reference: list[float], candidate: list[float]
+) -> dict[str, tuple[float, float]]:
+    """Per kind and overall: the mean of candidate - reference over the same crops and its
+    standard error, so two weights are compared on each crop rather than by their means."""
+    difference = np.asarray(candidate, float) - np.asarray(reference, float)
+    kind_of = np.asarray(kinds)
+    result = {}
+    for kind in [*dict.fromkeys(kinds), "all"]:
+        d = difference if kind == "all" else difference[kind_of == kind]
+        error = float(d.std(ddof=1) / np.sqrt(d.size)) if d.size > 1 else float("nan")
+        result[kind] = (float(d.mean()), error)
+    return result
 
 
 @torch.no_grad()

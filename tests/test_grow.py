@@ -1,0 +1,82 @@
+"""`python -m doctrpp.training.grow`: wider feed-forward layers, same function."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+import torch
+
+from doctrpp.errors import CliError
+from doctrpp.export.checkpoint import CheckpointError, load_model
+from doctrpp.export.model import DocTrPP
+from doctrpp.training.cli import _model_config
+from doctrpp.training.grow import grow_file, main, widen_feed_forward
+from doctrpp.training.throughput import model_config
+
+# fp32 sums in another order after the zero columns: rounding only (pixels of the 288 map).
+GROWN_TOLERANCE_PX = 1e-3
+
+
+def _grown(tiny_model, ffn_dim: int = 96) -> DocTrPP:
+    state, config = widen_feed_forward(tiny_model.state_dict(), tiny_model.config, ffn_dim)
+    model = DocTrPP(config).eval()
+    model.load_state_dict(state)
+    return model
+
+
+def test_the_grown_model_computes_the_same_map(tiny_model, report_difference):
+    grown = _grown(tiny_model)
+    assert grown.config.ffn_dim == 96 and tiny_model.config.ffn_dim == 64
+    image = torch.rand(1, 3, 288, 288, generator=torch.Generator().manual_seed(1)) * 255
+    with torch.no_grad():
+        largest = (grown(image) - tiny_model(image)).abs().max().item()
+    report_difference("grown vs source backward map", largest, GROWN_TOLERANCE_PX)
+    assert largest <= GROWN_TOLERANCE_PX
+
+
+def test_the_new_units_learn_from_the_first_step(tiny_model):
+    grown = _grown(tiny_model).train()
+    grown(torch.rand(1, 3, 288, 288) * 255).abs().mean().backward()
+    linear2 = grown.encoder_block0.layers[0].linear2.weight
+    assert linear2.grad[:, 64:].abs().sum() > 0  # the zero columns get gradients
+    assert torch.count_nonzero(linear2.detach()[:, 64:]) == 0
+
+
+def test_grow_file_keeps_the_record_and_never_overwrites(tiny_model, tmp_path, capsys):
+    source = tmp_path / "source.pt"
+    record = {"step": 1234, "samples_seen": 9872, "cpu_seconds": 5.0}
+    torch.save(
+        {
+            "model": tiny_model.state_dict(),
+            "config": dataclasses.asdict(tiny_model.config),
+            "train_state": record,
+        },
+        source,
+    )
+    out = tmp_path / "grown.pt"
+    assert main([str(source), "--ffn-dim", "128", "--out", str(out)]) == 0
+    assert "feed-forward width 128" in capsys.readouterr().out
+    written = torch.load(out, weights_only=True)
+    assert written["train_state"] == record and written["config"]["ffn_dim"] == 128
+    assert load_model(out).config.ffn_dim == 128
+    before = out.read_bytes()
+    assert main([str(source), "--ffn-dim", "256", "--out", str(out)]) == 2
+    assert "exists" in capsys.readouterr().err and out.read_bytes() == before
+    assert main([str(source), "--ffn-dim", "32", "--out", str(tmp_path / "x.pt")]) == 2
+    assert "must exceed" in capsys.readouterr().err
+    with pytest.raises(CheckpointError, match="not found"):
+        grow_file(tmp_path / "missing.pt", tmp_path / "y.pt", 128)
+
+
+def test_the_trainer_takes_the_config_of_the_file_it_starts_from(tiny_model, tmp_path):
+    grown = tmp_path / "grown.pt"
+    state, config = widen_feed_forward(tiny_model.state_dict(), tiny_model.config, 96)
+    torch.save({"model": state, "config": dataclasses.asdict(config)}, grown)
+    assert _model_config(None, "--init", grown) == config
+    assert model_config(str(grown)) == config  # the throughput tool's --configs take files too
+    assert _model_config("tiny", "--init", None).ffn_dim == 64
+    with pytest.raises(CliError, match="another config"):
+        _model_config("tiny", "--init", grown)
+    with pytest.raises(CliError, match="no such file"):
+        _model_config(None, "--resume", tmp_path / "missing.pth")

@@ -1,0 +1,59 @@
+"""`python -m doctrpp.training.score`: fresh validation crops and the paired comparison."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from doctrpp.training.validate import paired_difference, validation_set
+
+
+def test_a_later_start_continues_the_same_validation_stream():
+    first_three = validation_set(3)
+    from_second = validation_set(2, start=1)
+    for a, b in zip(first_three[1:], from_second, strict=True):
+        assert a.kind == b.kind
+        assert np.array_equal(a.image, b.image)
+        assert np.array_equal(a.backward_map, b.backward_map)
+    with pytest.raises(ValueError, match="validation crops"):
+        validation_set(2, start=-1)
+
+
+def test_paired_difference_is_the_mean_per_crop_difference_with_its_standard_error():
+    kinds = ["complete", "none", "complete", "none"]
+    reference = [10.0, 20.0, 12.0, 22.0]
+    candidate = [9.0, 21.0, 10.0, 22.0]  # complete: -1, -2; none: +1, 0
+    pairs = paired_difference(kinds, reference, candidate)
+    assert list(pairs) == ["complete", "none", "all"]
+    assert pairs["complete"] == pytest.approx((-1.5, 0.5))
+    assert pairs["none"] == pytest.approx((0.5, 0.5))
+    mean, error = pairs["all"]
+    assert mean == pytest.approx(-0.5)
+    assert error == pytest.approx(np.std([-1, 1, -2, 0], ddof=1) / 2)
+
+
+def test_score_compares_each_file_with_the_first_on_fresh_crops(tiny_checkpoint, capsys):
+    from doctrpp.training.score import main as score
+
+    args = [str(tiny_checkpoint), str(tiny_checkpoint), "--validation-start", "48"]
+    assert score([*args, "--validation-size", "3"]) == 0
+    lines = [json.loads(line) for line in capsys.readouterr().out.strip().splitlines()]
+    assert [line["weights"] for line in lines[:3]] == ["identity", *args[:2]]
+    paired = lines[3]
+    assert paired["paired_against"] == str(tiny_checkpoint)
+    assert paired["paired_map_error_px/all"] == [0.0, 0.0]  # a file against itself
+    assert len(lines) == 4
+
+
+def test_score_refuses_bad_arguments_in_one_line(tmp_path, capsys):
+    from doctrpp.training.score import main as score
+
+    with pytest.raises(SystemExit) as exit_info:
+        score([str(tmp_path / "missing.pt")])
+    assert exit_info.value.code == 2
+    assert "no such weights file" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        score([str(tmp_path / "missing.pt"), "--validation-start", "-1"])
+    assert "--validation-start" in capsys.readouterr().err
