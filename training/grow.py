@@ -14,16 +14,16 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import io
 import math
-import os
 import sys
-import tempfile
 from pathlib import Path
 
 import torch
 
 from doctrpp.export.checkpoint import CheckpointError, read_checkpoint
 from doctrpp.export.config import ModelConfig
+from doctrpp.files import write_bytes_atomically
 
 FEED_FORWARD_IN, FEED_FORWARD_OUT = ".linear1.", ".linear2."
 
@@ -60,15 +60,9 @@ def grow_file(source: Path, out: Path, ffn_dim: int, seed: int = 0) -> ModelConf
     raw = torch.load(source, map_location="cpu", weights_only=True)
     carried = {k: raw[k] for k in ("train_state", "training_record") if k in raw}
     payload = {"model": state, "config": dataclasses.asdict(config), **carried}
-    out.parent.mkdir(parents=True, exist_ok=True)
-    handle, temporary = tempfile.mkstemp(dir=out.parent, suffix=".tmp")
-    os.close(handle)
-    try:
-        torch.save(payload, temporary)
-        os.replace(temporary, out)
-    finally:
-        if os.path.exists(temporary):
-            os.remove(temporary)
+    buffer = io.BytesIO()
+    torch.save(payload, buffer)
+    write_bytes_atomically(out, buffer.getvalue())
     return config
 
 
