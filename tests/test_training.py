@@ -366,6 +366,20 @@ def test_device_choice(tmp_path, capsys):
         assert code == 2 and "no CUDA GPU" in capsys.readouterr().err
 
 
+def test_bf16_autocast_only_where_native_unless_asked(tmp_path, capsys):
+    """Emulated bf16 made a CPU step 6.6x slower: the default follows the hardware, and the
+    run says which precision it chose; --bf16 / --no-bf16 override it."""
+    from doctrpp.training.loop import bf16_is_native
+
+    native = bf16_is_native(torch.device("cpu"))
+    assert isinstance(native, bool)
+    train(quick_settings(tmp_path / "auto", device="cpu", steps=1, validate_every=1))
+    expected = "bf16 autocast" if native else "fp32"
+    assert f"precision: {expected}" in capsys.readouterr().out
+    train(quick_settings(tmp_path / "forced", device="cpu", steps=1, validate_every=1, bf16=True))
+    assert "precision:" not in capsys.readouterr().out
+
+
 def test_data_workers_cpu_time_is_counted():
     """Generation runs in worker processes: their CPU time is what children_cpu_seconds adds."""
     import subprocess

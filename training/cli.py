@@ -67,10 +67,16 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "--device",
         choices=["auto", "cuda", "cpu"],
         default="auto",
-        help="where to train (default auto: CUDA when torch sees a GPU); bf16 autocast on both",
+        help="where to train (default auto: CUDA when torch sees a GPU)",
     )
     p.add_argument("--threads", type=int, help="torch threads per process")
-    p.add_argument("--no-bf16", action="store_true", help="train in fp32 (no bf16 autocast)")
+    precision = p.add_mutually_exclusive_group()
+    precision.add_argument(
+        "--bf16",
+        action="store_true",
+        help="force bf16 autocast (default: on where the device computes bf16 natively)",
+    )
+    precision.add_argument("--no-bf16", action="store_true", help="train in fp32")
     p.add_argument(
         "--validate-every",
         type=int,
@@ -199,7 +205,7 @@ def run(args: argparse.Namespace) -> int:
         steps=args.steps,
         batch=args.batch,
         max_lr=args.lr,
-        bf16=not args.no_bf16,
+        bf16=True if args.bf16 else False if args.no_bf16 else None,
         workers=args.workers,
         device=args.device,
         threads=args.threads,
