@@ -5,7 +5,8 @@
 # only this package is installed, offline. Its 16 cores generate the crops (the bottleneck
 # there), hence --sample-reuse 2.
 #
-# usage (repository root): [DEVICE=cuda] [STEPS=1600] bash scripts/gpu_train.sh [MINUTES]
+# usage (repository root): [DEVICE=cuda] [STEPS=1600] [INIT=training/resume/mid.pt] bash scripts/gpu_train.sh [MINUTES]
+# INIT: the weights to continue from (training/resume/README.md says which is the long run's end).
 # Afterwards, here: copy $OUT's mid.pt over training/resume/mid.pt if its validation is
 # better, and record the run in MODEL_CARD.md. STEPS is the lr cycle's length; size it so
 # that it ends before MINUTES (the log's samples/s tells, for the next time).
@@ -19,7 +20,7 @@ if ! python3 -c "import doctrpp" 2>/dev/null; then
     python3 -m pip install -q --no-index --no-deps --no-build-isolation . >"$out/install.log" 2>&1 \
         || { echo "gpu_train: installing the package failed (see $out/install.log)" >&2; exit 1; }
 fi
-python3 -m doctrpp train --out "$run" --config mid --init training/resume/mid.pt \
+python3 -m doctrpp train --out "$run" --config mid --init "${INIT:-training/resume/mid.pt}" \
     --device "${DEVICE:-cuda}" --batch 32 --lr 3e-4 --steps "${STEPS:-1600}" \
     --sample-reuse 2 --gradient-loss 2 --validate-every 400 --max-minutes "$minutes" 2>&1 | tee "$out/train.log"
 cp "$run/validation.jsonl" "$out/"
