@@ -5,8 +5,11 @@
 # only this package is installed, offline. Its 16 cores generate the crops (the bottleneck
 # there), hence --sample-reuse 2.
 #
-# usage (repository root): [DEVICE=cuda] [STEPS=1600] [INIT=training/resume/mid.pt] bash scripts/gpu_train.sh [MINUTES]
+# usage (repository root): [DEVICE=cuda] [STEPS=1600] [INIT=training/resume/mid.pt]
+#        [BACKBONE_WIDTHS="24 48 72"] bash scripts/gpu_train.sh [MINUTES]
 # INIT: the weights to continue from (training/resume/README.md says which is the long run's end).
+# BACKBONE_WIDTHS: first widen INIT's feature encoder to these widths (`training.grow`; same
+# output, more capacity); the run then trains the wider model (its config comes from INIT).
 # Afterwards, here: copy $OUT's mid.pt over training/resume/mid.pt if its validation is
 # better, and record the run in MODEL_CARD.md. STEPS is the lr cycle's length; size it so
 # that it ends before MINUTES (the log's samples/s tells, for the next time).
@@ -20,7 +23,15 @@ if ! python3 -c "import doctrpp" 2>/dev/null; then
     python3 -m pip install -q --no-index --no-deps --no-build-isolation . >"$out/install.log" 2>&1 \
         || { echo "gpu_train: installing the package failed (see $out/install.log)" >&2; exit 1; }
 fi
-python3 -m doctrpp train --out "$run" --config mid --init "${INIT:-training/resume/mid.pt}" \
+init="${INIT:-training/resume/mid.pt}"
+if [ -n "${BACKBONE_WIDTHS:-}" ]; then
+    rm -f /tmp/gpu_grown.pt
+    # shellcheck disable=SC2086  # three widths, split on purpose
+    python3 -m doctrpp.training.grow "$init" --backbone-widths $BACKBONE_WIDTHS \
+        --out /tmp/gpu_grown.pt | tee "$out/grow.log"
+    init=/tmp/gpu_grown.pt
+fi
+python3 -m doctrpp train --out "$run" --init "$init" \
     --device "${DEVICE:-cuda}" --batch 32 --lr 3e-4 --steps "${STEPS:-1600}" \
     --sample-reuse 2 --gradient-loss 2 --validate-every 400 --max-minutes "$minutes" 2>&1 | tee "$out/train.log"
 cp "$run/validation.jsonl" "$out/"

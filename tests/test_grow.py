@@ -1,4 +1,5 @@
-"""`python -m doctrpp.training.grow`: wider feed-forward layers, same function."""
+"""`python -m doctrpp.training.grow`: wider feed-forward layers or feature encoder, same
+function."""
 
 from __future__ import annotations
 
@@ -11,7 +12,13 @@ from doctrpp.errors import CliError
 from doctrpp.export.checkpoint import CheckpointError, load_model
 from doctrpp.export.model import DocTrPP
 from doctrpp.training.cli import _model_config
-from doctrpp.training.grow import grow_file, main, widen_feed_forward
+from doctrpp.training.grow import (
+    backbone_stages,
+    grow_file,
+    main,
+    widen_backbone,
+    widen_feed_forward,
+)
 from doctrpp.training.throughput import model_config
 
 # fp32 sums in another order after the zero columns: rounding only (pixels of the 288 map).
@@ -33,6 +40,53 @@ def test_the_grown_model_computes_the_same_map(tiny_model, report_difference):
         largest = (grown(image) - tiny_model(image)).abs().max().item()
     report_difference("grown vs source backward map", largest, GROWN_TOLERANCE_PX)
     assert largest <= GROWN_TOLERANCE_PX
+
+
+def _wide_backbone(tiny_model, widths=(12, 24, 30)) -> DocTrPP:
+    state, config = widen_backbone(tiny_model.state_dict(), tiny_model.config, widths)
+    model = DocTrPP(config).eval()
+    model.load_state_dict(state)
+    return model
+
+
+def test_a_wider_feature_encoder_computes_the_same_map(tiny_model, report_difference):
+    grown = _wide_backbone(tiny_model)
+    assert grown.config.backbone_widths == (12, 24, 30)
+    assert tiny_model.config.backbone_widths == (8, 16, 24)
+    image = torch.rand(1, 3, 288, 288, generator=torch.Generator().manual_seed(2)) * 255
+    with torch.no_grad():
+        largest = (grown(image) - tiny_model(image)).abs().max().item()
+    report_difference("wider feature encoder vs source backward map", largest, GROWN_TOLERANCE_PX)
+    assert largest <= GROWN_TOLERANCE_PX
+
+
+def test_the_new_channels_learn_from_the_first_step(tiny_model):
+    grown = _wide_backbone(tiny_model).train()
+    grown(torch.rand(1, 3, 288, 288) * 255).abs().mean().backward()
+    projection = grown.fnet.conv2.weight  # reads stage 3: 24 old channels, 6 new
+    assert projection.grad[:, 24:].abs().sum() > 0  # the zero weights get gradients
+    assert torch.count_nonzero(projection.detach()[:, 24:]) == 0
+    first = grown.fnet.conv1.weight
+    assert first.shape[0] == 12 and torch.count_nonzero(first.detach()[8:]) > 0
+
+
+def test_every_feature_encoder_convolution_has_its_stages(tiny_model):
+    stages = {
+        key: backbone_stages(key)
+        for key in tiny_model.state_dict()
+        if key.startswith("fnet.") and key.endswith(".weight")
+    }
+    assert stages["fnet.conv1.weight"] == (None, 0)
+    assert stages["fnet.layer1.0.conv1.weight"] == (0, 0)
+    assert stages["fnet.layer2.0.conv1.weight"] == (0, 1)
+    assert stages["fnet.layer2.0.conv2.weight"] == (1, 1)
+    assert stages["fnet.layer3.0.downsample.0.weight"] == (1, 2)
+    assert stages["fnet.layer3.1.conv1.weight"] == (2, 2)
+    assert stages["fnet.conv2.weight"] == (2, None)
+    with pytest.raises(ValueError, match="none below"):
+        widen_backbone(tiny_model.state_dict(), tiny_model.config, (4, 16, 24))
+    with pytest.raises(ValueError, match="at least one above"):
+        widen_backbone(tiny_model.state_dict(), tiny_model.config, (8, 16, 24))
 
 
 def test_the_new_units_learn_from_the_first_step(tiny_model):
@@ -57,6 +111,27 @@ def test_grow_file_keeps_the_record_and_never_overwrites(tiny_model, tmp_path, c
     out = tmp_path / "grown.pt"
     assert main([str(source), "--ffn-dim", "128", "--out", str(out)]) == 0
     assert "feed-forward width 128" in capsys.readouterr().out
+    both = tmp_path / "both.pt"
+    assert (
+        main(
+            [
+                str(source),
+                "--ffn-dim",
+                "96",
+                "--backbone-widths",
+                "8",
+                "24",
+                "32",
+                "--out",
+                str(both),
+            ]
+        )
+        == 0
+    )
+    assert load_model(both).config.backbone_widths == (8, 24, 32)
+    assert load_model(both).config.ffn_dim == 96
+    assert main([str(source), "--out", str(tmp_path / "none.pt")]) == 2
+    assert "nothing to grow" in capsys.readouterr().err
     written = torch.load(out, weights_only=True)
     assert written["train_state"] == record and written["config"]["ffn_dim"] == 128
     assert load_model(out).config.ffn_dim == 128

@@ -1,13 +1,21 @@
-"""Widen a trained model's feed-forward layers without changing what it computes.
+"""Widen a trained model without changing what it computes.
 
-usage: python -m doctrpp.training.grow WEIGHTS --ffn-dim 1024 --out FILE [--seed 0]
+usage: python -m doctrpp.training.grow WEIGHTS [--ffn-dim 1024] [--backbone-widths 24 48 72]
+       --out FILE [--seed 0]
 
-Every attention layer's feed-forward part is relu(x W1 + b1) W2 + b2. New hidden units get
-W1 rows and b1 entries drawn as `nn.Linear` draws them and W2 columns of zeros, so the
-grown model's output is the old one's (up to float rounding) while the new units get
-gradients from the first step: more capacity for a run that has stopped gaining, without
-starting over. The file keeps the source's training record, so `doctrpp train --init
-FILE` (its config is taken from the file) continues the step, stream and CPU hours.
+Feed-forward parts (`--ffn-dim`): every attention layer's relu(x W1 + b1) W2 + b2 gets new
+hidden units with W1 rows and b1 entries drawn as `nn.Linear` draws them and W2 columns of
+zeros.
+
+Feature encoder (`--backbone-widths`): every convolution that writes a stage's feature map
+gets new output filters drawn as `nn.Conv2d` draws them, and every convolution that reads
+it gets zero weights from the new channels into its old outputs. Instance norm, relu and
+the residual sums act channel by channel, so the old channels never see the new ones.
+
+Either way the grown model's output is the old one's (up to float rounding) while the new
+units get gradients from the first step: more capacity for a run that has stopped gaining,
+without starting over. The file keeps the source's training record, so `doctrpp train
+--init FILE` (its config is taken from the file) continues the step, stream and CPU hours.
 """
 
 from __future__ import annotations
@@ -16,6 +24,7 @@ import argparse
 import dataclasses
 import io
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -26,6 +35,8 @@ from doctrpp.export.config import ModelConfig
 from doctrpp.files import write_bytes_atomically
 
 FEED_FORWARD_IN, FEED_FORWARD_OUT = ".linear1.", ".linear2."
+# fnet.layerN.B.PART: block B of stage N (1-3); its first block may change the width.
+_RESIDUAL_KEY = re.compile(r"^fnet\.layer(\d)\.(\d)\.(conv1|conv2|downsample\.0)\.")
 
 
 def widen_feed_forward(
@@ -49,14 +60,85 @@ def widen_feed_forward(
     return grown, dataclasses.replace(config, ffn_dim=ffn_dim)
 
 
-def grow_file(source: Path, out: Path, ffn_dim: int, seed: int = 0) -> ModelConfig:
+def backbone_stages(key: str) -> tuple[int | None, int | None]:
+    """(stage read, stage written) by an fnet convolution: 0-2 index `backbone_widths`,
+    None the image (3 channels) or the transformer's `hidden_dim`."""
+    if key.startswith("fnet.conv1."):
+        return None, 0
+    if key.startswith("fnet.conv2."):
+        return 2, None
+    match = _RESIDUAL_KEY.match(key)
+    if match is None:
+        raise ValueError(f"unexpected feature-encoder key {key}")
+    stage, block, part = int(match[1]) - 1, int(match[2]), match[3]
+    reads_previous_stage = block == 0 and part != "conv2" and stage > 0
+    return (stage - 1 if reads_previous_stage else stage), stage
+
+
+def _widen_convolution(
+    weight: torch.Tensor, bias: torch.Tensor, added_in: int, added_out: int, generator
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """New input channels feed only new output filters; new filters are drawn fresh."""
+    out_channels, in_channels, height, width = weight.shape
+    fan_in = (in_channels + added_in) * height * width
+    bound = 1.0 / math.sqrt(fan_in)  # nn.Conv2d's default range for weight and bias
+    weight = torch.cat([weight, weight.new_zeros(out_channels, added_in, height, width)], 1)
+    fresh = torch.rand((added_out, in_channels + added_in, height, width), generator=generator)
+    weight = torch.cat([weight, (fresh * 2 - 1) * bound])
+    fresh_bias = (torch.rand(added_out, generator=generator) * 2 - 1) * bound
+    return weight, torch.cat([bias, fresh_bias])
+
+
+def widen_backbone(
+    state: dict[str, torch.Tensor],
+    config: ModelConfig,
+    widths: tuple[int, int, int],
+    seed: int = 0,
+) -> tuple[dict[str, torch.Tensor], ModelConfig]:
+    """The state dict and config with feature-encoder stages `widths` channels wide."""
+    widths = tuple(int(w) for w in widths)
+    old = config.backbone_widths
+    too_narrow = len(widths) != 3 or any(new < was for new, was in zip(widths, old, strict=True))
+    if too_narrow or widths == old:
+        raise ValueError(
+            f"--backbone-widths {' '.join(map(str, widths))} must be 3 widths, none below "
+            f"the model's {' '.join(map(str, old))} and at least one above"
+        )
+    added = [new - was for new, was in zip(widths, old, strict=True)]
+    generator = torch.Generator().manual_seed(seed)
+    grown = {key: value.float() for key, value in state.items()}
+    for key in [k for k in state if k.startswith("fnet.") and k.endswith(".weight")]:
+        reads, writes = backbone_stages(key)
+        bias_key = key[: -len("weight")] + "bias"
+        grown[key], grown[bias_key] = _widen_convolution(
+            grown[key],
+            grown[bias_key],
+            0 if reads is None else added[reads],
+            0 if writes is None else added[writes],
+            generator,
+        )
+    return grown, dataclasses.replace(config, backbone_widths=widths)
+
+
+def grow_file(
+    source: Path,
+    out: Path,
+    ffn_dim: int | None = None,
+    seed: int = 0,
+    backbone_widths: tuple[int, int, int] | None = None,
+) -> ModelConfig:
     """Write the widened weights of `source` to `out` (new), with its training record."""
+    if ffn_dim is None and backbone_widths is None:
+        raise ValueError("nothing to grow: give --ffn-dim and/or --backbone-widths")
     if out.exists():
         raise FileExistsError(f"{out} exists; choose a new --out")
     state, config = read_checkpoint(source)
     if config is None:
         raise CheckpointError(f"{source} records no model config")
-    state, config = widen_feed_forward(state, config, ffn_dim, seed)
+    if ffn_dim is not None:
+        state, config = widen_feed_forward(state, config, ffn_dim, seed)
+    if backbone_widths is not None:
+        state, config = widen_backbone(state, config, backbone_widths, seed)
     raw = torch.load(source, map_location="cpu", weights_only=True)
     carried = {k: raw[k] for k in ("train_state", "training_record") if k in raw}
     payload = {"model": state, "config": dataclasses.asdict(config), **carried}
@@ -69,16 +151,23 @@ def grow_file(source: Path, out: Path, ffn_dim: int, seed: int = 0) -> ModelConf
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m doctrpp.training.grow", description=__doc__)
     parser.add_argument("weights", type=Path, help="weights or checkpoint file with a config")
-    parser.add_argument("--ffn-dim", type=int, required=True, help="new feed-forward width")
+    parser.add_argument("--ffn-dim", type=int, help="new feed-forward width")
+    parser.add_argument(
+        "--backbone-widths", type=int, nargs=3, metavar="W", help="new feature-encoder widths"
+    )
     parser.add_argument("--out", type=Path, required=True, help="file to write (new)")
     parser.add_argument("--seed", type=int, default=0, help="draws of the new units")
     args = parser.parse_args(argv)
+    widths = None if args.backbone_widths is None else tuple(args.backbone_widths)
     try:
-        config = grow_file(args.weights, args.out, args.ffn_dim, args.seed)
+        config = grow_file(args.weights, args.out, args.ffn_dim, args.seed, widths)
     except (CheckpointError, ValueError, FileExistsError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    print(f"wrote {args.out}: feed-forward width {config.ffn_dim} ({config.to_json()})")
+    print(
+        f"wrote {args.out}: feed-forward width {config.ffn_dim}, feature-encoder widths "
+        f"{' '.join(map(str, config.backbone_widths))} ({config.to_json()})"
+    )
     return 0
 
 
