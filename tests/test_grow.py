@@ -25,38 +25,36 @@ from doctrpp.training.throughput import model_config
 GROWN_TOLERANCE_PX = 1e-3
 
 
-def _grown(tiny_model, ffn_dim: int = 96) -> DocTrPP:
-    state, config = widen_feed_forward(tiny_model.state_dict(), tiny_model.config, ffn_dim)
+def _as_model(state: dict, config) -> DocTrPP:
     model = DocTrPP(config).eval()
     model.load_state_dict(state)
     return model
 
 
-def test_the_grown_model_computes_the_same_map(tiny_model, report_difference):
-    grown = _grown(tiny_model)
-    assert grown.config.ffn_dim == 96 and tiny_model.config.ffn_dim == 64
-    image = torch.rand(1, 3, 288, 288, generator=torch.Generator().manual_seed(1)) * 255
-    with torch.no_grad():
-        largest = (grown(image) - tiny_model(image)).abs().max().item()
-    report_difference("grown vs source backward map", largest, GROWN_TOLERANCE_PX)
-    assert largest <= GROWN_TOLERANCE_PX
+def _grown(tiny_model, ffn_dim: int = 96) -> DocTrPP:
+    return _as_model(*widen_feed_forward(tiny_model.state_dict(), tiny_model.config, ffn_dim))
 
 
 def _wide_backbone(tiny_model, widths=(12, 24, 30)) -> DocTrPP:
-    state, config = widen_backbone(tiny_model.state_dict(), tiny_model.config, widths)
-    model = DocTrPP(config).eval()
-    model.load_state_dict(state)
-    return model
+    return _as_model(*widen_backbone(tiny_model.state_dict(), tiny_model.config, widths))
 
 
-def test_a_wider_feature_encoder_computes_the_same_map(tiny_model, report_difference):
-    grown = _wide_backbone(tiny_model)
-    assert grown.config.backbone_widths == (12, 24, 30)
-    assert tiny_model.config.backbone_widths == (8, 16, 24)
-    image = torch.rand(1, 3, 288, 288, generator=torch.Generator().manual_seed(2)) * 255
+@pytest.mark.parametrize(
+    ("grow", "what", "grown_config"),
+    [
+        (_grown, "feed-forward 96", {"ffn_dim": 96}),
+        (_wide_backbone, "feature encoder 12/24/30", {"backbone_widths": (12, 24, 30)}),
+    ],
+)
+def test_the_grown_model_computes_the_same_map(
+    tiny_model, report_difference, grow, what, grown_config
+):
+    grown = grow(tiny_model)
+    assert grown.config == dataclasses.replace(tiny_model.config, **grown_config)
+    image = torch.rand(1, 3, 288, 288, generator=torch.Generator().manual_seed(1)) * 255
     with torch.no_grad():
         largest = (grown(image) - tiny_model(image)).abs().max().item()
-    report_difference("wider feature encoder vs source backward map", largest, GROWN_TOLERANCE_PX)
+    report_difference(f"grown ({what}) vs source backward map", largest, GROWN_TOLERANCE_PX)
     assert largest <= GROWN_TOLERANCE_PX
 
 
