@@ -39,6 +39,11 @@ FEED_FORWARD_IN, FEED_FORWARD_OUT = ".linear1.", ".linear2."
 _RESIDUAL_KEY = re.compile(r"^fnet\.layer(\d)\.(\d)\.(conv1|conv2|downsample\.0)\.")
 
 
+def _drawn_uniform(shape: tuple[int, ...], bound: float, generator) -> torch.Tensor:
+    """Uniform in [-bound, bound], as `nn.Linear` and `nn.Conv2d` initialise."""
+    return (torch.rand(shape, generator=generator) * 2 - 1) * bound
+
+
 def widen_feed_forward(
     state: dict[str, torch.Tensor], config: ModelConfig, ffn_dim: int, seed: int = 0
 ) -> tuple[dict[str, torch.Tensor], ModelConfig]:
@@ -52,8 +57,7 @@ def widen_feed_forward(
     for key, value in state.items():
         value = value.float()
         if FEED_FORWARD_IN in key:  # weight (ffn, dim) or bias (ffn,): new rows
-            fresh = (torch.rand((added, *value.shape[1:]), generator=generator) * 2 - 1) * bound
-            value = torch.cat([value, fresh])
+            value = torch.cat([value, _drawn_uniform((added, *value.shape[1:]), bound, generator)])
         elif FEED_FORWARD_OUT in key and key.endswith("weight"):  # (dim, ffn): zero columns
             value = torch.cat([value, value.new_zeros(value.shape[0], added)], dim=1)
         grown[key] = value
@@ -83,10 +87,9 @@ def _widen_convolution(
     fan_in = (in_channels + added_in) * height * width
     bound = 1.0 / math.sqrt(fan_in)  # nn.Conv2d's default range for weight and bias
     weight = torch.cat([weight, weight.new_zeros(out_channels, added_in, height, width)], 1)
-    fresh = torch.rand((added_out, in_channels + added_in, height, width), generator=generator)
-    weight = torch.cat([weight, (fresh * 2 - 1) * bound])
-    fresh_bias = (torch.rand(added_out, generator=generator) * 2 - 1) * bound
-    return weight, torch.cat([bias, fresh_bias])
+    fresh = _drawn_uniform((added_out, in_channels + added_in, height, width), bound, generator)
+    weight = torch.cat([weight, fresh])
+    return weight, torch.cat([bias, _drawn_uniform((added_out,), bound, generator)])
 
 
 def widen_backbone(
