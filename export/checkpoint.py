@@ -69,6 +69,19 @@ def check_state_dict(model: torch.nn.Module, state: Mapping[str, torch.Tensor]) 
 
 def read_checkpoint(path: str | Path) -> tuple[dict[str, torch.Tensor], ModelConfig | None]:
     """Read a checkpoint file; returns its state dict and the config it records, if any."""
+    return split_checkpoint(read_checkpoint_payload(path))
+
+
+def split_checkpoint(obj: object) -> tuple[dict[str, torch.Tensor], ModelConfig | None]:
+    """The state dict and recorded config of what `read_checkpoint_payload` returned."""
+    config = None
+    if isinstance(obj, Mapping) and isinstance(obj.get("config"), Mapping):
+        config = ModelConfig.from_dict(dict(obj["config"]))
+    return unwrap_state_dict(obj), config
+
+
+def read_checkpoint_payload(path: str | Path) -> object:
+    """Load a checkpoint file as saved (state dict or a dict with training extras)."""
     path = Path(path)
     if not path.is_file():
         raise CheckpointError(f"checkpoint not found: {path}")
@@ -82,10 +95,7 @@ def read_checkpoint(path: str | Path) -> tuple[dict[str, torch.Tensor], ModelCon
     except Exception as exc:  # torch raises several types for corrupt or pickled files
         first_line = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise CheckpointError(f"cannot read checkpoint {path}: {first_line}") from None
-    config = None
-    if isinstance(obj, Mapping) and isinstance(obj.get("config"), Mapping):
-        config = ModelConfig.from_dict(dict(obj["config"]))
-    return unwrap_state_dict(obj), config
+    return obj
 
 
 def looks_like_torch_file(path: Path) -> bool:

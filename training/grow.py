@@ -30,7 +30,11 @@ from pathlib import Path
 
 import torch
 
-from doctrpp.export.checkpoint import CheckpointError, read_checkpoint
+from doctrpp.export.checkpoint import (
+    CheckpointError,
+    read_checkpoint_payload,
+    split_checkpoint,
+)
 from doctrpp.export.config import ModelConfig
 from doctrpp.files import write_bytes_atomically
 
@@ -135,14 +139,14 @@ def grow_file(
         raise ValueError("nothing to grow: give --ffn-dim and/or --backbone-widths")
     if out.exists():
         raise FileExistsError(f"{out} exists; choose a new --out")
-    state, config = read_checkpoint(source)
+    raw = read_checkpoint_payload(source)
+    state, config = split_checkpoint(raw)
     if config is None:
         raise CheckpointError(f"{source} records no model config")
     if ffn_dim is not None:
         state, config = widen_feed_forward(state, config, ffn_dim, seed)
     if backbone_widths is not None:
         state, config = widen_backbone(state, config, backbone_widths, seed)
-    raw = torch.load(source, map_location="cpu", weights_only=True)
     carried = {k: raw[k] for k in ("train_state", "training_record") if k in raw}
     payload = {"model": state, "config": dataclasses.asdict(config), **carried}
     buffer = io.BytesIO()
