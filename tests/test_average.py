@@ -61,8 +61,16 @@ def test_missing_ancestor_and_bad_input_are_clear(lineage, tmp_path):
         average([lineage["first"], lineage["second"]], [])
     with pytest.raises(CliError, match="at least two"):
         average([lineage["first"]], [])
-    with pytest.raises(CliError, match="no such file"):
+    with pytest.raises(CliError, match="checkpoint not found"):
         average([lineage["first"], tmp_path / "missing.pt"], [])
+    (tmp_path / "notes.pt").write_text("not a checkpoint")
+    with pytest.raises(CliError, match="not a PyTorch checkpoint"):
+        average([lineage["first"], tmp_path / "notes.pt"], [])
+    torch.save({"model": {}}, tmp_path / "weights_only.pt")
+    with pytest.raises(CliError, match="not a training checkpoint"):
+        average([lineage["first"], tmp_path / "weights_only.pt"], [])
+    with pytest.raises(CliError, match="not a training checkpoint"):
+        publish(tmp_path / "weights_only.pt", tmp_path / "published", note="test")
 
 
 def test_run_folder_publishes(lineage, tmp_path, capsys):

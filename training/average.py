@@ -30,7 +30,7 @@ from doctrpp.errors import CliError
 from doctrpp.export.config import ModelConfig
 from doctrpp.export.model import DocTrPP
 
-from .loop import save_checkpoint
+from .loop import read_training_checkpoint, save_checkpoint
 from .realcheck import real_photo_set, validation_scores
 from .runlog import RunLog
 from .validate import validation_set
@@ -42,16 +42,6 @@ def check(condition: bool, message: str) -> None:
 
 
 COUNTED = ("samples_seen", "generated_samples", "cpu_seconds", "data_cpu_seconds", "wall_seconds")
-
-
-def read_weights(path: Path) -> dict:
-    """A training checkpoint or weights-only snapshot: its model, config and train_state."""
-    if not path.is_file():
-        raise CliError(f"{path}: no such file")
-    checkpoint = torch.load(path, map_location="cpu", weights_only=True)
-    missing = {"model", "config", "train_state"} - set(checkpoint)
-    check(not missing, f"{path}: not a training checkpoint (no {', '.join(sorted(missing))})")
-    return checkpoint
 
 
 def mean_state_dict(states: list[dict]) -> dict:
@@ -93,7 +83,7 @@ def combined_state(states: list[dict], ancestors: list[dict]) -> dict:
 def average(paths: list[Path], ancestors: list[Path]) -> dict:
     """The averaged checkpoint (model, config, train_state) of `paths`."""
     check(len(paths) >= 2, "give at least two checkpoints to average")
-    checkpoints = [read_weights(p) for p in paths]
+    checkpoints = [read_training_checkpoint(p) for p in paths]
     config = checkpoints[0]["config"]
     for path, checkpoint in zip(paths, checkpoints, strict=True):
         check(checkpoint["config"] == config, f"{path}: another model configuration")
@@ -102,7 +92,7 @@ def average(paths: list[Path], ancestors: list[Path]) -> dict:
         "config": config,
         "train_state": combined_state(
             [c["train_state"] for c in checkpoints],
-            [read_weights(p)["train_state"] for p in ancestors],
+            [read_training_checkpoint(p)["train_state"] for p in ancestors],
         ),
     }
 

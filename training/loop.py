@@ -16,6 +16,8 @@ import torch
 import torch.distributed as dist
 from torch.utils.data import DataLoader
 
+from doctrpp.errors import CliError
+from doctrpp.export.checkpoint import CheckpointError, read_checkpoint_payload
 from doctrpp.export.config import ModelConfig
 from doctrpp.export.model import DocTrPP
 from doctrpp.files import write_bytes_atomically
@@ -90,6 +92,20 @@ def save_checkpoint(path: Path, payload: dict) -> None:
     buffer = io.BytesIO()
     torch.save(payload, buffer)
     write_bytes_atomically(path, buffer.getvalue())
+
+
+def read_training_checkpoint(path: Path) -> dict:
+    """A checkpoint `save_checkpoint` wrote (last.pth, best.pth, a snapshot): its model,
+    config and train_state; anything else is a one-line CliError."""
+    try:
+        checkpoint = read_checkpoint_payload(path)
+    except CheckpointError as exc:
+        raise CliError(str(exc)) from None
+    keys = set(checkpoint) if isinstance(checkpoint, dict) else set()
+    missing = {"model", "config", "train_state"} - keys
+    if missing:
+        raise CliError(f"{path}: not a training checkpoint (no {', '.join(sorted(missing))})")
+    return checkpoint
 
 
 def _leave_stopping_to_the_trainer(_worker_id: int) -> None:

@@ -26,6 +26,7 @@ from doctrpp.errors import CliError
 from doctrpp.export.default_weights import DEFAULT_NAME, WEIGHTS_DIR
 from doctrpp.files import sha256_of, write_bytes_atomically
 
+from .loop import read_training_checkpoint
 from .runlog import read_validation
 
 
@@ -59,7 +60,7 @@ def training_record(checkpoint: dict, run_dir: Path, note: str) -> dict:
 
 
 def publish(checkpoint_path: Path, out_dir: Path, note: str) -> Path:
-    checkpoint = torch.load(checkpoint_path, map_location="cpu", weights_only=True)
+    checkpoint = read_training_checkpoint(checkpoint_path)
     run_dir = checkpoint_path.parent
     if run_dir.name == "snapshots":  # RUN_DIR/snapshots/stepNNNNNNN.pt
         run_dir = run_dir.parent
