@@ -11,8 +11,9 @@
 # BACKBONE_WIDTHS: first widen INIT's feature encoder to these widths (`training.grow`; same
 # output, more capacity); the run then trains the wider model (its config comes from INIT).
 # Afterwards, here: score $OUT's end.pt against the default (training/resume/README.md), keep
-# it under training/resume/ if it is better, and record the run in MODEL_CARD.md. STEPS is the lr cycle's length; size it so
-# that it ends before MINUTES (the log's samples/s tells, for the next time).
+# it under training/resume/ if it is better, and record the run in MODEL_CARD.md. STEPS is
+# the lr cycle's length; size it so that it ends before MINUTES (the log's samples/s tells,
+# for the next time).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 minutes="${1:-8}"
