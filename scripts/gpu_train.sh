@@ -2,23 +2,24 @@
 # Continue the long run on a lent CUDA machine (the library's `device` tool) from the
 # committed weights, and leave the final weights and the logs in $OUT to be fetched.
 # The device image has torch (CUDA), OpenCV, numpy, pillow and matplotlib (our fonts), so
-# only this package is installed, offline. Its 16 cores generate the crops (the bottleneck
-# there), hence --sample-reuse 2.
+# the source tree runs as it is (run from the repository root). Its 16 cores generate the
+# crops (the bottleneck there: about 100 samples/s in session 27), hence --sample-reuse 2.
 #
-# usage (repository root): [DEVICE=cuda] [STEPS=1600] [INIT=training/resume/bb24_s26b_end.pt]
+# usage (repository root): [DEVICE=cuda] [STEPS=N] [LR=2e-4] [INIT=training/resume/bb24_s26b_end.pt]
 #        [BACKBONE_WIDTHS="24 48 72"] bash scripts/gpu_train.sh [MINUTES]
 # INIT: the weights to continue from (training/resume/README.md says which is the long run's end).
 # BACKBONE_WIDTHS: first widen INIT's feature encoder to these widths (`training.grow`; same
 # output, more capacity); the run then trains the wider model (its config comes from INIT).
 # Afterwards, here: score $OUT's end.pt against the default (training/resume/README.md), keep
 # it under training/resume/ if it is better, and record the run in MODEL_CARD.md. STEPS is
-# the lr cycle's length; size it so that it ends before MINUTES (the log's samples/s tells,
-# for the next time).
+# the lr cycle's length; unset, a one-minute probe measures samples/s and sizes it to end
+# inside MINUTES. fp32 like the CPU runs (the model is small; generation is the bottleneck).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 minutes="${1:-8}"
 out="${OUT:-runs/gpu_out}"
 run=/tmp/gpu_run
+rm -rf "$run" /tmp/gpu_probe  # scratch: a warm machine keeps the last call's
 mkdir -p "$out"
 if ! python3 -c "import doctrpp" 2>/dev/null; then
     python3 -m pip install -q --no-index --no-deps --no-build-isolation . >"$out/install.log" 2>&1 \
@@ -32,9 +33,26 @@ if [ -n "${BACKBONE_WIDTHS:-}" ]; then
         --out /tmp/gpu_grown.pt | tee "$out/grow.log"
     init=/tmp/gpu_grown.pt
 fi
+started=$SECONDS
+steps="${STEPS:-}"
+if [ -z "$steps" ]; then
+    # Probe the samples/s for a minute at a tiny lr, so that the lr cycle (OneCycle over
+    # STEPS) ends inside MINUTES: a run cut by --max-minutes would end at a high lr.
+    python3 -m doctrpp train --out /tmp/gpu_probe --init "$init" --device "${DEVICE:-cuda}" \
+        --batch 32 --lr 1e-6 --steps 100000 --sample-reuse 2 --no-bf16 --validate-every 100000 \
+        --validation-size 4 --max-minutes 1 >"$out/probe.log" 2>&1 \
+        || { tail -n 20 "$out/probe.log" >&2; echo "gpu_train: the probe run failed" >&2; exit 1; }
+    rate=$(grep -o '[0-9.]* samples/s' "$out/probe.log" | tail -n 1 | cut -d' ' -f1)
+    [ -n "$rate" ] || { echo "gpu_train: the probe logged no samples/s (set STEPS)" >&2; exit 1; }
+    left=$((minutes * 60 - (SECONDS - started) - 60))  # 60 s: start-up, validation, saving
+    steps=$(python3 -c "print(max(50, int(0.9 * float('$rate') * $left / 32)))")
+    echo "gpu_train: probe ${rate} samples/s; ${left} s left -> STEPS=${steps}"
+fi
+left_minutes=$(python3 -c "print(($minutes * 60 - ($SECONDS - $started)) / 60)")
 python3 -m doctrpp train --out "$run" --init "$init" \
-    --device "${DEVICE:-cuda}" --batch 32 --lr 3e-4 --steps "${STEPS:-1600}" \
-    --sample-reuse 2 --gradient-loss 2 --validate-every 400 --max-minutes "$minutes" 2>&1 | tee "$out/train.log"
+    --device "${DEVICE:-cuda}" --batch 32 --lr "${LR:-2e-4}" --steps "$steps" --no-bf16 \
+    --sample-reuse 2 --gradient-loss 2 --validate-every 400 --max-minutes "$left_minutes" 2>&1 \
+    | tee "$out/train.log"
 cp "$run/validation.jsonl" "$out/"
 last=$(ls "$run"/snapshots/step*.pt | tail -n 1)
 cp "$last" "$out/end.pt"

@@ -461,6 +461,11 @@ def test_gradient_loss_trains_and_the_cli_rejects_a_negative_weight(tmp_path, ca
     code = main(["train", "--out", str(tmp_path / "r"), "--real-photos-count", "0"])
     assert code == 2
     assert "--real-photos-count must be >= 1" in capsys.readouterr().err
+    snapshot = sorted((tmp_path / "g" / "snapshots").glob("step*.pt"))[-1]
+    code = main(["train", "--out", str(tmp_path / "s"), "--resume", str(snapshot)])
+    assert code == 2  # a weights-only snapshot has no optimiser: one line naming --init
+    err = capsys.readouterr().err.strip()
+    assert "no optimizer, scheduler" in err and "--init" in err and len(err.splitlines()) == 1
 
 
 def test_flip_averaged_predictions_match_the_runtimes_definition(tiny_model):
@@ -487,3 +492,22 @@ def test_flip_averaged_predictions_match_the_runtimes_definition(tiny_model):
 
 def _mirrored(image: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(image[:, ::-1])
+
+
+class _OpenCvThreads(torch.utils.data.Dataset):
+    def __len__(self) -> int:
+        return 4
+
+    def __getitem__(self, index: int) -> int:
+        import cv2
+
+        return cv2.getNumThreads()
+
+
+def test_workers_beside_other_workers_run_opencv_on_one_thread():
+    from doctrpp.training.loop import _prepare_worker
+
+    loader = torch.utils.data.DataLoader(
+        _OpenCvThreads(), batch_size=None, num_workers=2, worker_init_fn=_prepare_worker
+    )
+    assert {int(n) for n in loader} == {1}

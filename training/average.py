@@ -30,7 +30,7 @@ from doctrpp.errors import CliError
 from doctrpp.export.config import ModelConfig
 from doctrpp.export.model import DocTrPP
 
-from .loop import read_training_checkpoint, save_checkpoint
+from .checkpoints import read_training_checkpoint, save_checkpoint
 from .realcheck import real_photo_set, validation_scores
 from .runlog import RunLog
 from .validate import validation_set

@@ -170,6 +170,13 @@ def run(args: argparse.Namespace) -> int:
         raise CliError("--init and --resume exclude each other (--resume keeps the optimiser)")
     flag, start = ("--init", args.init) if args.init else ("--resume", args.resume)
     config = _model_config(args.config, flag, start)
+    if args.resume:
+        from .checkpoints import RESUME_KEYS, read_training_checkpoint
+
+        try:
+            read_training_checkpoint(args.resume, RESUME_KEYS)
+        except CliError as exc:  # a weights-only snapshot has no optimiser to resume
+            raise CliError(f"--resume {exc} (a snapshot continues with --init)") from None
     if args.device == "cuda":
         import torch
 

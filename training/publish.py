@@ -26,7 +26,7 @@ from doctrpp.errors import CliError
 from doctrpp.export.default_weights import DEFAULT_NAME, WEIGHTS_DIR
 from doctrpp.files import sha256_of, write_bytes_atomically
 
-from .loop import read_training_checkpoint
+from .checkpoints import read_training_checkpoint
 from .runlog import read_validation
 
 
