@@ -492,22 +492,3 @@ def test_flip_averaged_predictions_match_the_runtimes_definition(tiny_model):
 
 def _mirrored(image: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(image[:, ::-1])
-
-
-class _OpenCvThreads(torch.utils.data.Dataset):
-    def __len__(self) -> int:
-        return 4
-
-    def __getitem__(self, index: int) -> int:
-        import cv2
-
-        return cv2.getNumThreads()
-
-
-def test_workers_beside_other_workers_run_opencv_on_one_thread():
-    from doctrpp.training.loop import _prepare_worker
-
-    loader = torch.utils.data.DataLoader(
-        _OpenCvThreads(), batch_size=None, num_workers=2, worker_init_fn=_prepare_worker
-    )
-    assert {int(n) for n in loader} == {1}

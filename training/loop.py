@@ -89,16 +89,10 @@ def _prepare_worker(_worker_id: int) -> None:
     """Data workers ignore SIGTERM/SIGINT: a signal sent to the whole process group (Ctrl-C,
     `kill -- -PGID`, a job scheduler) must reach only the trainer, which checkpoints and
     then shuts the workers down, instead of killing a worker and crashing the trainer.
-    Beside other workers each runs OpenCV on one thread: 15 workers each spreading over all
-    16 cores of the GPU machine spent 0.35 CPU s per crop against 0.16 on 2 cores (session
-    27). A lone worker (the CPU trainer's) keeps OpenCV's default."""
+    (`cv2.setNumThreads(1)` here would deadlock: a forked worker inherits the parent's
+    OpenCV thread pool, session 27.)"""
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    info = torch.utils.data.get_worker_info()
-    if info is not None and info.num_workers > 1:
-        import cv2
-
-        cv2.setNumThreads(1)
 
 
 def _stop_workers(batches) -> None:
