@@ -21,10 +21,6 @@ out="${OUT:-runs/gpu_out}"
 run=/tmp/gpu_run
 rm -rf "$run" /tmp/gpu_probe  # scratch: a warm machine keeps the last call's
 mkdir -p "$out"
-if ! python3 -c "import doctrpp" 2>/dev/null; then
-    python3 -m pip install -q --no-index --no-deps --no-build-isolation . >"$out/install.log" 2>&1 \
-        || { echo "gpu_train: installing the package failed (see $out/install.log)" >&2; exit 1; }
-fi
 init="${INIT:-training/resume/bb24_s26b_end.pt}"
 if [ -n "${BACKBONE_WIDTHS:-}" ]; then
     rm -f /tmp/gpu_grown.pt

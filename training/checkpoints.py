@@ -31,8 +31,16 @@ def read_training_checkpoint(path: Path, required: Iterable[str] = TRAINING_KEYS
         checkpoint = read_checkpoint_payload(path)
     except CheckpointError as exc:
         raise CliError(str(exc)) from None
+    problem = missing_keys(path, checkpoint, required)
+    if problem:
+        raise CliError(problem)
+    return checkpoint
+
+
+def missing_keys(path: Path, checkpoint: object, required: Iterable[str]) -> str | None:
+    """What a loaded checkpoint lacks of `required`, as one line; None when nothing."""
     keys = set(checkpoint) if isinstance(checkpoint, dict) else set()
     missing = set(required) - keys
-    if missing:
-        raise CliError(f"{path}: not a training checkpoint (no {', '.join(sorted(missing))})")
-    return checkpoint
+    if not missing:
+        return None
+    return f"{path}: not a training checkpoint (no {', '.join(sorted(missing))})"

@@ -136,7 +136,11 @@ def _model_config(name: str | None, flag: str, start: Path | None):
     """The preset `name`; without one, the config the starting file (`--init` or
     `--resume`) records, e.g. a grown model's (`training.grow`), else the reference. A preset
     that differs from the starting file's is refused in one line."""
-    from doctrpp.export.checkpoint import CheckpointError, read_checkpoint
+    from doctrpp.export.checkpoint import (
+        CheckpointError,
+        read_checkpoint_payload,
+        split_checkpoint,
+    )
     from doctrpp.export.config import REFERENCE, config_by_name
 
     recorded = None
@@ -144,9 +148,16 @@ def _model_config(name: str | None, flag: str, start: Path | None):
         if not start.is_file():
             raise CliError(f"{flag} {start}: no such file")
         try:
-            recorded = read_checkpoint(start)[1]
+            payload = read_checkpoint_payload(start)
         except CheckpointError as exc:
             raise CliError(f"{flag} {start}: {exc}") from None
+        if flag == "--resume":  # a weights-only snapshot has no optimiser to resume
+            from .checkpoints import RESUME_KEYS, missing_keys
+
+            problem = missing_keys(start, payload, RESUME_KEYS)
+            if problem:
+                raise CliError(f"--resume {problem} (a snapshot continues with --init)")
+        recorded = split_checkpoint(payload)[1]
     if name is None:
         return recorded or REFERENCE
     try:
@@ -170,13 +181,6 @@ def run(args: argparse.Namespace) -> int:
         raise CliError("--init and --resume exclude each other (--resume keeps the optimiser)")
     flag, start = ("--init", args.init) if args.init else ("--resume", args.resume)
     config = _model_config(args.config, flag, start)
-    if args.resume:
-        from .checkpoints import RESUME_KEYS, read_training_checkpoint
-
-        try:
-            read_training_checkpoint(args.resume, RESUME_KEYS)
-        except CliError as exc:  # a weights-only snapshot has no optimiser to resume
-            raise CliError(f"--resume {exc} (a snapshot continues with --init)") from None
     if args.device == "cuda":
         import torch
 

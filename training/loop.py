@@ -85,7 +85,7 @@ class Distributed:
             dist.destroy_process_group()
 
 
-def _prepare_worker(_worker_id: int) -> None:
+def _leave_stopping_to_the_trainer(_worker_id: int) -> None:
     """Data workers ignore SIGTERM/SIGINT: a signal sent to the whole process group (Ctrl-C,
     `kill -- -PGID`, a job scheduler) must reach only the trainer, which checkpoints and
     then shuts the workers down, instead of killing a worker and crashing the trainer.
@@ -98,7 +98,7 @@ def _prepare_worker(_worker_id: int) -> None:
 def _stop_workers(batches) -> None:
     """Shut the loader's workers down now. Left to garbage collection after an error (the
     traceback keeps the iterator alive), multiprocessing's exit handler would `terminate`
-    them, which they ignore (`_prepare_worker`), and wait for them forever."""
+    them, which they ignore (`_leave_stopping_to_the_trainer`), and wait for them forever."""
     shutdown = getattr(batches, "_shutdown_workers", None)  # torch's own orderly shutdown
     if shutdown is not None:
         shutdown()
@@ -252,7 +252,7 @@ def train(s: TrainSettings) -> dict:
         batch_size=s.batch,
         sampler=StreamSampler(state["samples_seen"], env.rank, env.world),
         num_workers=s.workers,
-        worker_init_fn=_prepare_worker if s.workers else None,
+        worker_init_fn=_leave_stopping_to_the_trainer if s.workers else None,
         persistent_workers=s.workers > 0,
         prefetch_factor=ahead if s.workers else None,
     )
