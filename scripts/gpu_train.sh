@@ -6,7 +6,7 @@
 # crops (the bottleneck there: about 100 samples/s in session 27), hence --sample-reuse 2.
 #
 # usage (repository root): [DEVICE=cuda] [STEPS=N] [LR=2e-4] [INIT=training/resume/bb24_s26b_end.pt]
-#        [BACKBONE_WIDTHS="24 48 72"] bash scripts/gpu_train.sh [MINUTES]
+#        [BACKBONE_WIDTHS="24 48 72"] [PHOTOMETRIC=0] bash scripts/gpu_train.sh [MINUTES]
 # INIT: the weights to continue from (training/resume/README.md says which is the long run's end).
 # BACKBONE_WIDTHS: first widen INIT's feature encoder to these widths (`training.grow`; same
 # output, more capacity); the run then trains the wider model (its config comes from INIT).
@@ -14,8 +14,13 @@
 # it under training/resume/ if it is better, and record the run in MODEL_CARD.md. STEPS is
 # the lr cycle's length; unset, a one-minute probe measures samples/s and sizes it to end
 # inside MINUTES. fp32 like the CPU runs (the model is small; generation is the bottleneck).
+# PHOTOMETRIC: the weight of `--photometric-loss`. On CUDA the data workers are spawned with
+# one OpenCV thread each (`--worker-start auto`; not yet measured there).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# numpy's OpenBLAS would give each of the 15 generating workers a thread per core (the
+# generator's (N, 3) @ (3, 3) products); the trainer's own numpy work is small.
+export OPENBLAS_NUM_THREADS="${OPENBLAS_NUM_THREADS:-1}"
 minutes="${1:-8}"
 out="${OUT:-runs/gpu_out}"
 run=/tmp/gpu_run
@@ -47,7 +52,8 @@ fi
 left_minutes=$(python3 -c "print(($minutes * 60 - ($SECONDS - $started)) / 60)")
 python3 -m doctrpp train --out "$run" --init "$init" \
     --device "${DEVICE:-cuda}" --batch 32 --lr "${LR:-2e-4}" --steps "$steps" --no-bf16 \
-    --sample-reuse 2 --gradient-loss 2 --validate-every 400 --max-minutes "$left_minutes" 2>&1 \
+    --sample-reuse 2 --gradient-loss 2 --photometric-loss "${PHOTOMETRIC:-0}" \
+    --validate-every 400 --max-minutes "$left_minutes" 2>&1 \
     | tee "$out/train.log"
 cp "$run/validation.jsonl" "$out/"
 last=$(ls "$run"/snapshots/step*.pt | tail -n 1)

@@ -311,6 +311,25 @@ def quick_settings(out, **changes) -> TrainSettings:
     return TrainSettings(**{**base, **changes})
 
 
+def test_spawned_workers_train_like_forked_ones(tmp_path):
+    """Spawned workers (one OpenCV thread each; the default on CUDA) give the same batches:
+    the parent has used OpenCV before they start, which is what deadlocked forked ones."""
+    from doctrpp.training.loop import worker_start_method
+
+    assert worker_start_method("auto", "cuda") == "spawn"
+    assert worker_start_method("auto", "cpu") == "fork"
+    with pytest.raises(ValueError, match="auto, fork or spawn"):
+        worker_start_method("thread", "cpu")
+    finals = []
+    for start in ("fork", "spawn"):
+        out = tmp_path / start
+        state = train(quick_settings(out, workers=1, kind="complete", worker_start=start))
+        assert state["step"] == 2
+        finals.append(load_model(out / "last.pth").state_dict())
+    for name, value in finals[0].items():
+        assert torch.equal(value, finals[1][name]), name
+
+
 def test_init_continues_from_weights_only_file(tmp_path):
     """--init: weights from a weights-only file, step/stream/hours carried on, a new cycle."""
     from doctrpp.training.loop import carried_state
@@ -446,6 +465,38 @@ def test_gradient_loss_ignores_placement_and_weighs_local_shape():
     both = map_loss(bent, target, 2.0)
     expected = map_l1(bent, target) + 2.0 * map_gradient_l1(bent, target)
     assert torch.allclose(both, expected)
+
+
+def test_photometric_loss_is_zero_on_the_true_map_and_pulls_a_shifted_one_back():
+    from doctrpp.training.losses import map_l1, map_loss, rectified_image_l1
+
+    sample = generate(3, "complete")
+    images, target = (t[None] for t in to_tensors(sample.image, sample.backward_map))
+    assert float(rectified_image_l1(images, target, target)) == pytest.approx(0.0, abs=1e-7)
+    shifted = (target + torch.tensor([2.0, 0.0]).view(1, 2, 1, 1)).requires_grad_(True)
+    loss = rectified_image_l1(images, shifted, target)
+    assert float(loss.detach()) > 1e-3
+    (gradient,) = torch.autograd.grad(loss, shifted)
+    # descending the gradient moves x back toward the true map
+    assert float(gradient[:, 0].sum()) > 0 and abs(float(gradient[:, 1].sum())) < float(
+        gradient[:, 0].sum()
+    )
+    both = map_loss(shifted, target, 0.0, images, 5.0)
+    assert torch.allclose(both, map_l1(shifted, target) + 5.0 * loss)
+    with pytest.raises(ValueError, match="needs the input images"):
+        map_loss(shifted, target, 0.0, None, 5.0)
+
+
+def test_photometric_loss_trains_and_the_cli_rejects_a_negative_weight(tmp_path, capsys):
+    from doctrpp.cli import main
+
+    state = train(quick_settings(tmp_path / "p", kind="complete", photometric_loss=10.0))
+    assert state["step"] == 2
+    code = main(
+        ["train", "--out", str(tmp_path / "r"), "--config", "tiny", "--photometric-loss", "-1"]
+    )
+    assert code == 2
+    assert "--photometric-loss must be >= 0" in capsys.readouterr().err
 
 
 def test_gradient_loss_trains_and_the_cli_rejects_a_negative_weight(tmp_path, capsys):

@@ -129,6 +129,22 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         help="add W times the L1 of the maps' 8-pixel differences, which ignores where the "
         "page sits and weighs its local shape (default 0: the paper's plain L1)",
     )
+    p.add_argument(
+        "--worker-start",
+        choices=("auto", "fork", "spawn"),
+        default="auto",
+        help="how data workers start: spawn gives each one OpenCV thread (for many workers on "
+        "a GPU machine), fork starts quicker; auto (default) spawns on CUDA, forks elsewhere",
+    )
+    p.add_argument(
+        "--photometric-loss",
+        type=float,
+        default=0.0,
+        metavar="W",
+        help="add W times the L1 between the crop rectified by the predicted map and by the "
+        "true one (intensities 0-1, at a few blur widths), which weighs map errors by the "
+        "print they move (default 0)",
+    )
     p.set_defaults(handler=run)
 
 
@@ -198,6 +214,8 @@ def run(args: argparse.Namespace) -> int:
         raise CliError("--real-photos-count must be >= 1")
     if args.gradient_loss < 0:
         raise CliError("--gradient-loss must be >= 0")
+    if args.photometric_loss < 0:
+        raise CliError("--photometric-loss must be >= 0")
     if args.page_reuse < 1:
         raise CliError("--page-reuse must be >= 1")
     if args.sample_reuse < 1:
@@ -236,6 +254,8 @@ def run(args: argparse.Namespace) -> int:
         page_reuse=args.page_reuse,
         sample_reuse=args.sample_reuse,
         gradient_loss=args.gradient_loss,
+        photometric_loss=args.photometric_loss,
+        worker_start=args.worker_start,
         seed=args.seed,
     )
     state = train(settings)
