@@ -487,28 +487,18 @@ def test_photometric_loss_is_zero_on_the_true_map_and_pulls_a_shifted_one_back()
         map_loss(shifted, target, 0.0, None, 5.0)
 
 
-def test_photometric_loss_trains_and_the_cli_rejects_a_negative_weight(tmp_path, capsys):
+def test_loss_terms_train_and_the_cli_rejects_negative_weights(tmp_path, capsys):
     from doctrpp.cli import main
 
-    state = train(quick_settings(tmp_path / "p", kind="complete", photometric_loss=10.0))
-    assert state["step"] == 2
-    code = main(
-        ["train", "--out", str(tmp_path / "r"), "--config", "tiny", "--photometric-loss", "-1"]
+    settings = quick_settings(
+        tmp_path / "g", kind="complete", gradient_loss=1.0, photometric_loss=10.0
     )
-    assert code == 2
-    assert "--photometric-loss must be >= 0" in capsys.readouterr().err
-
-
-def test_gradient_loss_trains_and_the_cli_rejects_a_negative_weight(tmp_path, capsys):
-    from doctrpp.cli import main
-
-    state = train(quick_settings(tmp_path / "g", kind="complete", gradient_loss=1.0))
+    state = train(settings)
     assert state["step"] == 2
-    code = main(
-        ["train", "--out", str(tmp_path / "r"), "--config", "tiny", "--gradient-loss", "-1"]
-    )
-    assert code == 2
-    assert "--gradient-loss must be >= 0" in capsys.readouterr().err
+    for flag in ("--gradient-loss", "--photometric-loss"):
+        code = main(["train", "--out", str(tmp_path / "r"), "--config", "tiny", flag, "-1"])
+        assert code == 2
+        assert f"{flag} must be >= 0" in capsys.readouterr().err
     code = main(["train", "--out", str(tmp_path / "r"), "--real-photos-count", "0"])
     assert code == 2
     assert "--real-photos-count must be >= 1" in capsys.readouterr().err
