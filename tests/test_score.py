@@ -43,7 +43,8 @@ def test_score_compares_each_file_with_the_first_on_fresh_crops(tiny_checkpoint,
     assert [line["weights"] for line in lines[:3]] == ["identity", *args[:2]]
     paired = lines[3]
     assert paired["paired_against"] == str(tiny_checkpoint)
-    assert paired["paired_map_error_px/all"] == [0.0, 0.0]  # a file against itself
+    for metric in ("map_error_px", "ms_ssim", "local_distortion"):  # a file against itself
+        assert paired[f"paired_{metric}/all"] == [0.0, 0.0]
     assert len(lines) == 4
 
 

@@ -14,8 +14,10 @@ the training loop's check) unless `--flip-average` asks for the runtime's defaul
 the generated crops larger (text that a 288 crop blurs away; the maps stay 288).
 
 With two or more weights files, one more line per file after the first compares it with
-the first on the same crops: the mean difference of map error per kind and its standard
-error (`paired_map_error_px/KIND`: [mean, standard error]; below zero is better). The
+the first on the same crops: the mean difference per kind and its standard error
+([mean, standard error]) of the map error (`paired_map_error_px/KIND`, below zero is
+better), the unmasked MS-SSIM (`paired_ms_ssim/KIND`, above zero is better) and the local
+distortion (`paired_local_distortion/KIND`, below zero is better). The
 trainer chooses snapshots on crops 0-47, so compare the chosen ones on fresh crops
 (`--validation-start 48 --validation-size 192`) before one ships: a lead won on the
 crops it was chosen by partly comes from that choice.
@@ -29,8 +31,11 @@ from pathlib import Path
 
 from doctrpp.export.checkpoint import load_model
 
-from .realcheck import real_photo_set, score_real, scores_of_maps, validation_maps
-from .validate import crop_map_errors, paired_difference, score_maps, validation_set
+from .realcheck import real_photo_set, score_real, validation_maps
+from .validate import crop_scores, paired_difference, score_maps, summarise_crops, validation_set
+
+# Per-crop measures compared crop by crop between weights files.
+PAIRED_METRICS = ("map_error_px", "ms_ssim", "local_distortion")
 
 
 def score_file(
@@ -39,8 +44,9 @@ def score_file(
     real_items,
     flip_average: bool = False,
     line_alignment: bool = False,
-) -> tuple[dict, list[float]]:
-    """The file's scores (None: the identity map) and each generated crop's map error."""
+) -> tuple[dict, list[dict[str, float]]]:
+    """The file's scores (None: the identity map) and each generated crop's
+    (`validate.crop_scores`)."""
     model = load_model(path).eval() if path else None
     maps, real_maps = validation_maps(
         model,
@@ -49,22 +55,28 @@ def score_file(
         flip_average=flip_average,
         line_alignment=line_alignment,
     )
-    scores = scores_of_maps(validation, maps, real_items, real_maps)
-    record = {"weights": str(path) if path else "identity", **scores}
-    return record, crop_map_errors(validation, maps)
+    rows = crop_scores(validation, maps)
+    scores = summarise_crops([it.kind for it in validation], rows)
+    if real_items:
+        scores.update(score_real(real_items, real_maps))
+    return {"weights": str(path) if path else "identity", **scores}, rows
 
 
-def paired_line(reference: Path, path: Path, kinds: list[str], errors: dict) -> dict:
-    """`path` against `reference` on the same crops (`validate.paired_difference`)."""
-    pairs = paired_difference(kinds, errors[reference], errors[path])
-    return {
-        "weights": str(path),
-        "paired_against": str(reference),
-        **{
-            f"paired_map_error_px/{kind}": [round(m, 4), round(e, 4)]
-            for kind, (m, e) in pairs.items()
-        },
-    }
+def paired_line(reference: Path, path: Path, kinds: list[str], rows: dict) -> dict:
+    """`path` against `reference` on the same crops (`validate.paired_difference`) for each
+    of `PAIRED_METRICS`."""
+    line: dict = {"weights": str(path), "paired_against": str(reference)}
+    for metric in PAIRED_METRICS:
+        pairs = paired_difference(
+            kinds, [r[metric] for r in rows[reference]], [r[metric] for r in rows[path]]
+        )
+        line.update(
+            {
+                f"paired_{metric}/{kind}": [round(m, 5), round(e, 5)]
+                for kind, (m, e) in pairs.items()
+            }
+        )
+    return line
 
 
 def score_uvdoc(validation, real_items) -> dict:
@@ -120,15 +132,15 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"no such weights file: {', '.join(missing)}")
     validation = validation_set(args.validation_size, args.crop_size, args.validation_start)
     real_items = real_photo_set(args.real_photos, args.photos) if args.real_photos else []
-    errors = {}
+    rows = {}
     for path in [None, *args.weights]:
-        scores, errors[path] = score_file(
+        scores, rows[path] = score_file(
             path, validation, real_items, args.flip_average, args.line_alignment
         )
         print(json.dumps(scores), flush=True)
     kinds = [item.kind for item in validation]
     for path in args.weights[1:]:
-        print(json.dumps(paired_line(args.weights[0], path, kinds, errors)), flush=True)
+        print(json.dumps(paired_line(args.weights[0], path, kinds, rows)), flush=True)
     if args.peer:
         print(json.dumps(score_uvdoc(validation, real_items)), flush=True)
     return 0

@@ -40,41 +40,54 @@ def validation_set(
     return items
 
 
-def score_maps(items: list[ValidationItem], predicted: list[np.ndarray]) -> dict[str, float]:
-    """Per kind and overall: mean map error (px of the 288 grid), MS-SSIM-M, how much of the
-    maps' non-projective part (curls, folds) was recovered (1 - its error / its size, ratio
-    of means; 0 = a model that only straightens perspective), and the unmasked MS-SSIM and
-    local distortion that issue #10's held-out check uses (black counts against them)."""
-    per_kind: dict[str, list[tuple[float, ...]]] = {}
+CROP_METRICS = ("map_error_px", "ms_ssim_m", "ms_ssim", "local_distortion")
+
+
+def crop_scores(items: list[ValidationItem], predicted: list[np.ndarray]) -> list[dict[str, float]]:
+    """Each crop's map error (px of the 288 grid), MS-SSIM-M, unmasked MS-SSIM and local
+    distortion, and the size of its map's non-projective part and of the error in it."""
+    rows = []
     for item, bm in zip(items, predicted, strict=True):
         rectified = rectify_with_map(item.image, bm)
         reference = rectify_with_map(item.image, item.backward_map)
         shape = nonprojective_recovery(bm, item.backward_map)
-        per_kind.setdefault(item.kind, []).append(
-            (
-                map_drift(bm, item.backward_map).mean_px,
-                ms_ssim_masked(rectified, reference),
-                shape.error_px,
-                shape.truth_px,
-                ms_ssim(rectified, reference),
-                local_distortion(rectified, reference),
-            )
+        rows.append(
+            {
+                "map_error_px": map_drift(bm, item.backward_map).mean_px,
+                "ms_ssim_m": ms_ssim_masked(rectified, reference),
+                "ms_ssim": ms_ssim(rectified, reference),
+                "local_distortion": local_distortion(rectified, reference),
+                "nonprojective_error_px": shape.error_px,
+                "nonprojective_truth_px": shape.truth_px,
+            }
         )
+    return rows
+
+
+def summarise_crops(kinds: list[str], rows: list[dict[str, float]]) -> dict[str, float]:
+    """Per kind and overall: the means of `crop_scores`, and how much of the maps'
+    non-projective part (curls, folds) was recovered (1 - its error / its size, ratio of
+    means; 0 = a model that only straightens perspective)."""
     scores: dict[str, float] = {}
-    everything = [v for values in per_kind.values() for v in values]
-    for kind, values in [*per_kind.items(), ("all", everything)]:
-        mean = np.mean(values, axis=0)
-        scores[f"map_error_px/{kind}"] = float(mean[0])
-        scores[f"ms_ssim_m/{kind}"] = float(mean[1])
-        scores[f"nonprojective_recovered/{kind}"] = float(1.0 - mean[2] / max(mean[3], 1e-9))
-        scores[f"ms_ssim/{kind}"] = float(mean[4])
-        scores[f"local_distortion/{kind}"] = float(mean[5])
+    kind_of = np.asarray(kinds)
+    for kind in [*dict.fromkeys(kinds), "all"]:
+        chosen = [r for r, k in zip(rows, kind_of, strict=True) if kind in ("all", k)]
+        mean = {key: float(np.mean([r[key] for r in chosen])) for key in chosen[0]}
+        scores[f"map_error_px/{kind}"] = mean["map_error_px"]
+        scores[f"ms_ssim_m/{kind}"] = mean["ms_ssim_m"]
+        scores[f"nonprojective_recovered/{kind}"] = 1.0 - mean["nonprojective_error_px"] / max(
+            mean["nonprojective_truth_px"], 1e-9
+        )
+        scores[f"ms_ssim/{kind}"] = mean["ms_ssim"]
+        scores[f"local_distortion/{kind}"] = mean["local_distortion"]
     return scores
 
 
-def crop_map_errors(items: list[ValidationItem], predicted: list[np.ndarray]) -> list[float]:
-    """Each crop's mean map error, px of the 288 grid."""
-    return [map_drift(bm, it.backward_map).mean_px for it, bm in zip(items, predicted, strict=True)]
+def score_maps(items: list[ValidationItem], predicted: list[np.ndarray]) -> dict[str, float]:
+    """Per kind and overall: mean map error (px of the 288 grid), MS-SSIM-M, non-projective
+    part recovered, and the unmasked MS-SSIM and local distortion that issue #10's held-out
+    check uses (black counts against them)."""
+    return summarise_crops([it.kind for it in items], crop_scores(items, predicted))
 
 
 def paired_difference(
