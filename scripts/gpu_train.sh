@@ -5,8 +5,8 @@
 # the source tree runs as it is (run from the repository root). Its 16 cores generate the
 # crops (the bottleneck there: about 100 samples/s in session 27), hence --sample-reuse 2.
 #
-# usage (repository root): [DEVICE=cuda] [STEPS=N] [LR=2e-4] [INIT=training/resume/bb24_s26b_end.pt]
-#        [BACKBONE_WIDTHS="24 48 72"] [PHOTOMETRIC=0] bash scripts/gpu_train.sh [MINUTES]
+# usage (repository root): [DEVICE=cuda] [STEPS=N] [LR=2e-4] [INIT=training/resume/bb24_s28d_end.pt]
+#        [BACKBONE_WIDTHS="24 48 72"] [PHOTOMETRIC=60] bash scripts/gpu_train.sh [MINUTES]
 # INIT: the weights to continue from (training/resume/README.md says which is the long run's end).
 # BACKBONE_WIDTHS: first widen INIT's feature encoder to these widths (`training.grow`; same
 # output, more capacity); the run then trains the wider model (its config comes from INIT).
@@ -14,8 +14,9 @@
 # it under training/resume/ if it is better, and record the run in MODEL_CARD.md. STEPS is
 # the lr cycle's length; unset, a one-minute probe measures samples/s and sizes it to end
 # inside MINUTES. fp32 like the CPU runs (the model is small; generation is the bottleneck).
-# PHOTOMETRIC: the weight of `--photometric-loss`. On CUDA the data workers are spawned with
-# one OpenCV thread each (`--worker-start auto`; not yet measured there).
+# PHOTOMETRIC: the weight of `--photometric-loss` (60, the shipped default's since session
+# 29; 0 trains without it). On CUDA the data workers are spawned with one OpenCV thread each
+# (`--worker-start auto`; not yet measured there).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # numpy's OpenBLAS would give each of the 15 generating workers a thread per core (the
@@ -26,7 +27,7 @@ out="${OUT:-runs/gpu_out}"
 run=/tmp/gpu_run
 rm -rf "$run" /tmp/gpu_probe  # scratch: a warm machine keeps the last call's
 mkdir -p "$out"
-init="${INIT:-training/resume/bb24_s26b_end.pt}"
+init="${INIT:-training/resume/bb24_s28d_end.pt}"
 if [ -n "${BACKBONE_WIDTHS:-}" ]; then
     rm -f /tmp/gpu_grown.pt
     # shellcheck disable=SC2086  # three widths, split on purpose
@@ -52,7 +53,7 @@ fi
 left_minutes=$(python3 -c "print(($minutes * 60 - ($SECONDS - $started)) / 60)")
 python3 -m doctrpp train --out "$run" --init "$init" \
     --device "${DEVICE:-cuda}" --batch 32 --lr "${LR:-2e-4}" --steps "$steps" --no-bf16 \
-    --sample-reuse 2 --gradient-loss 2 --photometric-loss "${PHOTOMETRIC:-0}" \
+    --sample-reuse 2 --gradient-loss 2 --photometric-loss "${PHOTOMETRIC:-60}" \
     --validate-every 400 --max-minutes "$left_minutes" 2>&1 \
     | tee "$out/train.log"
 cp "$run/validation.jsonl" "$out/"
