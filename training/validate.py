@@ -40,9 +40,6 @@ def validation_set(
     return items
 
 
-CROP_METRICS = ("map_error_px", "ms_ssim_m", "ms_ssim", "local_distortion")
-
-
 def crop_scores(items: list[ValidationItem], predicted: list[np.ndarray]) -> list[dict[str, float]]:
     """Each crop's map error (px of the 288 grid), MS-SSIM-M, unmasked MS-SSIM and local
     distortion, and the size of its map's non-projective part and of the error in it."""
@@ -69,9 +66,8 @@ def summarise_crops(kinds: list[str], rows: list[dict[str, float]]) -> dict[str,
     non-projective part (curls, folds) was recovered (1 - its error / its size, ratio of
     means; 0 = a model that only straightens perspective)."""
     scores: dict[str, float] = {}
-    kind_of = np.asarray(kinds)
     for kind in [*dict.fromkeys(kinds), "all"]:
-        chosen = [r for r, k in zip(rows, kind_of, strict=True) if kind in ("all", k)]
+        chosen = [r for r, k in zip(rows, kinds, strict=True) if kind in ("all", k)]
         mean = {key: float(np.mean([r[key] for r in chosen])) for key in chosen[0]}
         scores[f"map_error_px/{kind}"] = mean["map_error_px"]
         scores[f"ms_ssim_m/{kind}"] = mean["ms_ssim_m"]
