@@ -16,6 +16,9 @@ class ModelConfig:
     ffn_dim: int = 2048
     layers_per_block: int = 2  # attention layers in each encoder/decoder block
     backbone_widths: tuple[int, int, int] = (64, 128, 192)  # fnet layer1..layer3
+    # Layers of the four blocks on the 18x18 and 9x9 grids; None: layers_per_block, as in
+    # the reference. Depth there adds global context at a fraction of the 36x36 blocks' cost.
+    coarse_layers_per_block: int | None = None
 
     def __post_init__(self) -> None:
         if self.hidden_dim % self.num_heads:
@@ -24,6 +27,15 @@ class ModelConfig:
             )
         if self.hidden_dim % 4:
             raise ValueError("hidden_dim must be a multiple of 4 (sine positional encoding)")
+        if self.coarse_layers_per_block is not None and self.coarse_layers_per_block < 1:
+            raise ValueError("coarse_layers_per_block must be at least 1")
+
+    @property
+    def coarse_depth(self) -> int:
+        """Attention layers in each block on the 18x18 and 9x9 grids."""
+        if self.coarse_layers_per_block is None:
+            return self.layers_per_block
+        return self.coarse_layers_per_block
 
     def to_json(self) -> str:
         return json.dumps(dataclasses.asdict(self), sort_keys=True)

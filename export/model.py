@@ -62,13 +62,14 @@ class DocTrPP(nn.Module):
         )
         grids = (FEATURE_GRID, FEATURE_GRID // 2, FEATURE_GRID // 4)  # 36, 18, 9
         self.fnet = FeatureEncoder(config.backbone_widths, dim)
+        coarse = config.coarse_depth
         self.encoder_block0 = AttentionBlock(dim, heads, ffn, depth, grids[0])
-        self.encoder_block1 = AttentionBlock(dim, heads, ffn, depth, grids[1])
-        self.encoder_block2 = AttentionBlock(dim, heads, ffn, depth, grids[2])
+        self.encoder_block1 = AttentionBlock(dim, heads, ffn, coarse, grids[1])
+        self.encoder_block2 = AttentionBlock(dim, heads, ffn, coarse, grids[2])
         self.down_layer0 = nn.Conv2d(dim, dim, 3, stride=2, padding=1)
         self.down_layer1 = nn.Conv2d(dim, dim, 3, stride=2, padding=1)
-        self.decoder_block0 = AttentionBlock(dim, heads, ffn, depth, grids[2])
-        self.decoder_block1 = AttentionBlock(dim, heads, ffn, depth, grids[1])
+        self.decoder_block0 = AttentionBlock(dim, heads, ffn, coarse, grids[2])
+        self.decoder_block1 = AttentionBlock(dim, heads, ffn, coarse, grids[1])
         self.decoder_block2 = AttentionBlock(dim, heads, ffn, depth, grids[0])
         self.query_embed = nn.Embedding(grids[2] * grids[2], dim)
         self.update_block = UpdateBlock(dim)

@@ -1,5 +1,5 @@
-"""`python -m doctrpp.training.grow`: wider feed-forward layers or feature encoder, same
-function."""
+"""`python -m doctrpp.training.grow`: wider feed-forward layers or feature encoder, deeper
+coarse attention blocks, same function."""
 
 from __future__ import annotations
 
@@ -14,6 +14,7 @@ from doctrpp.export.model import DocTrPP
 from doctrpp.training.cli import _model_config
 from doctrpp.training.grow import (
     backbone_stages,
+    deepen_coarse_blocks,
     grow_file,
     main,
     widen_backbone,
@@ -37,6 +38,10 @@ def _grown(tiny_model, ffn_dim: int = 96) -> DocTrPP:
 
 def _wide_backbone(tiny_model, widths=(12, 24, 30)) -> DocTrPP:
     return _as_model(*widen_backbone(tiny_model.state_dict(), tiny_model.config, widths))
+
+
+def _deep_coarse(tiny_model, layers: int = 3) -> DocTrPP:
+    return _as_model(*deepen_coarse_blocks(tiny_model.state_dict(), tiny_model.config, layers))
 
 
 @pytest.mark.parametrize(
@@ -95,6 +100,45 @@ def test_the_new_units_learn_from_the_first_step(tiny_model):
     assert torch.count_nonzero(linear2.detach()[:, 64:]) == 0
 
 
+def test_deeper_coarse_blocks_compute_the_same_map(tiny_model, report_difference):
+    # Norms as training leaves them (not 1 and 0), so moving the last scale and shift counts.
+    generator = torch.Generator().manual_seed(2)
+    state = {
+        key: (torch.rand(value.shape, generator=generator) * 0.4 + 0.8)
+        if ".norm" in key and key.endswith("weight")
+        else (torch.rand(value.shape, generator=generator) * 0.2 - 0.1)
+        if ".norm" in key
+        else value
+        for key, value in tiny_model.state_dict().items()
+    }
+    source = _as_model(state, tiny_model.config)
+    grown = _as_model(*deepen_coarse_blocks(state, tiny_model.config, 3))
+    assert grown.config == dataclasses.replace(tiny_model.config, coarse_layers_per_block=3)
+    image = torch.rand(1, 3, 288, 288, generator=generator) * 255
+    with torch.no_grad():
+        largest = (grown(image) - source(image)).abs().max().item()
+    report_difference("grown (coarse blocks 3 layers) vs source", largest, GROWN_TOLERANCE_PX)
+    assert largest <= GROWN_TOLERANCE_PX
+
+
+def test_the_new_layers_sit_in_the_coarse_blocks_and_learn(tiny_model):
+    grown = _deep_coarse(tiny_model).train()
+    assert [
+        len(grown.get_submodule(f"{kind}_block{i}").layers)
+        for kind in ("encoder", "decoder")
+        for i in range(3)
+    ] == [1, 3, 3, 3, 3, 1]
+    grown(torch.rand(1, 3, 288, 288) * 255).abs().mean().backward()
+    new_layer = grown.decoder_block0.layers[2]
+    assert new_layer.linear2.weight.grad.abs().sum() > 0  # zero matrices get gradients
+    assert new_layer.self_attn.out_proj.weight.grad.abs().sum() > 0
+    assert torch.count_nonzero(new_layer.linear2.weight.detach()) == 0
+    old_last = tiny_model.encoder_block1.layers[0].norm3
+    assert torch.equal(grown.encoder_block1.layers[2].norm3.weight.detach(), old_last.weight)
+    with pytest.raises(ValueError, match="must exceed"):
+        deepen_coarse_blocks(tiny_model.state_dict(), tiny_model.config, 1)
+
+
 def test_grow_file_keeps_the_record_and_never_overwrites(tiny_model, tmp_path, capsys):
     source = tmp_path / "source.pt"
     record = {"step": 1234, "samples_seen": 9872, "cpu_seconds": 5.0}
@@ -128,6 +172,10 @@ def test_grow_file_keeps_the_record_and_never_overwrites(tiny_model, tmp_path, c
     )
     assert load_model(both).config.backbone_widths == (8, 24, 32)
     assert load_model(both).config.ffn_dim == 96
+    deep = tmp_path / "deep.pt"
+    assert main([str(source), "--coarse-layers", "2", "--out", str(deep)]) == 0
+    assert "coarse-block layers 2" in capsys.readouterr().out
+    assert load_model(deep).config.coarse_depth == 2
     assert main([str(source), "--out", str(tmp_path / "none.pt")]) == 2
     assert "nothing to grow" in capsys.readouterr().err
     written = torch.load(out, weights_only=True)

@@ -85,3 +85,10 @@ def test_config_validation():
     with pytest.raises(ValueError, match="unknown model config keys"):
         ModelConfig.from_dict({"width": 3})
     assert ModelConfig.from_dict(json.loads(TINY.to_json())) == TINY
+    with pytest.raises(ValueError, match="at least 1"):
+        ModelConfig(coarse_layers_per_block=0)
+    deep = ModelConfig.from_dict({**json.loads(TINY.to_json()), "coarse_layers_per_block": 2})
+    assert (deep.coarse_depth, TINY.coarse_depth) == (2, TINY.layers_per_block)
+    # Configs saved before the field existed still load, as the reference's layout.
+    saved = {k: v for k, v in json.loads(TINY.to_json()).items() if k != "coarse_layers_per_block"}
+    assert ModelConfig.from_dict(saved) == TINY

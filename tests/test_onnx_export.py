@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -41,6 +42,21 @@ def test_tiny_export_parity_and_graph(tiny_model, tiny_onnx, report_difference):
     dims = lambda v: [d.dim_value for d in v.type.tensor_type.shape.dim]  # noqa: E731
     assert (graph_input.name, dims(graph_input)) == (contract.INPUT_NAME, [1, 3, 288, 288])
     assert (graph_output.name, dims(graph_output)) == (contract.OUTPUT_NAME, [1, 2, 288, 288])
+
+
+def test_deeper_coarse_blocks_export_with_parity(tmp_path, report_difference):
+    """A config with more layers in the 18/9-grid blocks (training.grow --coarse-layers)."""
+    torch.manual_seed(3)
+    config = dataclasses.replace(TINY, coarse_layers_per_block=2)
+    model = DocTrPP(config).eval()
+    path = tmp_path / "deep.onnx"
+    export_onnx(model, path, checkpoint_sha256="0" * 64, checkpoint_note="deeper coarse blocks")
+    images = np.random.default_rng(2).random((1, 3, 288, 288), dtype=np.float32)
+    worst = parity_px(model, path, images)
+    report_difference("ONNX vs PyTorch (tiny, coarse blocks 2 layers)", worst, PARITY_TOLERANCE_PX)
+    assert worst <= PARITY_TOLERANCE_PX
+    meta = {p.key: p.value for p in onnx.load(str(path)).metadata_props}
+    assert json.loads(meta[contract.META_CONFIG])["coarse_layers_per_block"] == 2
 
 
 def test_metadata_inside_the_file(tiny_onnx):

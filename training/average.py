@@ -85,8 +85,10 @@ def average(paths: list[Path], ancestors: list[Path]) -> dict:
     check(len(paths) >= 2, "give at least two checkpoints to average")
     checkpoints = [read_training_checkpoint(p) for p in paths]
     config = checkpoints[0]["config"]
+    model_config = ModelConfig.from_dict(dict(config))  # files from before a new field match
     for path, checkpoint in zip(paths, checkpoints, strict=True):
-        check(checkpoint["config"] == config, f"{path}: another model configuration")
+        same = ModelConfig.from_dict(dict(checkpoint["config"])) == model_config
+        check(same, f"{path}: another model configuration")
     return {
         "model": mean_state_dict([c["model"] for c in checkpoints]),
         "config": config,

@@ -1,7 +1,7 @@
-"""Widen a trained model without changing what it computes.
+"""Widen or deepen a trained model without changing what it computes.
 
 usage: python -m doctrpp.training.grow WEIGHTS [--ffn-dim 1024] [--backbone-widths 24 48 72]
-       --out FILE [--seed 0]
+       [--coarse-layers 3] --out FILE [--seed 0]
 
 Feed-forward parts (`--ffn-dim`): every attention layer's relu(x W1 + b1) W2 + b2 gets new
 hidden units with W1 rows and b1 entries drawn as `nn.Linear` draws them and W2 columns of
@@ -12,7 +12,13 @@ gets new output filters drawn as `nn.Conv2d` draws them, and every convolution t
 it gets zero weights from the new channels into its old outputs. Instance norm, relu and
 the residual sums act channel by channel, so the old channels never see the new ones.
 
-Either way the grown model's output is the old one's (up to float rounding) while the new
+Coarse attention blocks (`--coarse-layers`): the four blocks on the 18x18 and 9x9 grids
+get new attention layers after their last one, each with zero output projections and a
+zero second feed-forward matrix, so its residual sums add nothing. The layers are post-norm,
+so the old last layer's final norm hands its scale and shift to the last new layer and
+outputs unit-normalised tokens, which the new layers' plain norms pass on unchanged.
+
+Every way the grown model's output is the old one's (up to float rounding) while the new
 units get gradients from the first step: more capacity for a run that has stopped gaining,
 without starting over. The file keeps the source's training record, so `doctrpp train
 --init FILE` (its config is taken from the file) continues the step, stream and CPU hours.
@@ -127,16 +133,74 @@ def widen_backbone(
     return grown, dataclasses.replace(config, backbone_widths=widths)
 
 
+COARSE_BLOCKS = ("encoder_block1", "encoder_block2", "decoder_block0", "decoder_block1")
+
+
+def _new_attention(prefix: str, dim: int, generator) -> dict[str, torch.Tensor]:
+    """Projections as `MultiheadAttention` draws them, with a zero output projection."""
+    return {
+        f"{prefix}.in_proj_weight": _drawn_uniform((3 * dim, dim), math.sqrt(1.5 / dim), generator),
+        f"{prefix}.in_proj_bias": torch.zeros(3 * dim),
+        f"{prefix}.out_proj.weight": torch.zeros(dim, dim),
+        f"{prefix}.out_proj.bias": torch.zeros(dim),
+    }
+
+
+def _new_layer(prefix: str, config: ModelConfig, generator) -> dict[str, torch.Tensor]:
+    """An attention layer whose residual sums add nothing and whose norms are plain."""
+    dim, ffn = config.hidden_dim, config.ffn_dim
+    bound = 1.0 / math.sqrt(dim)  # nn.Linear's range for linear1
+    layer = {
+        **_new_attention(f"{prefix}.self_attn", dim, generator),
+        **_new_attention(f"{prefix}.multihead_attn_list.0", dim, generator),
+        f"{prefix}.linear1.weight": _drawn_uniform((ffn, dim), bound, generator),
+        f"{prefix}.linear1.bias": _drawn_uniform((ffn,), bound, generator),
+        f"{prefix}.linear2.weight": torch.zeros(dim, ffn),
+        f"{prefix}.linear2.bias": torch.zeros(dim),
+    }
+    for norm in ("norm1", "norm2_list.0", "norm3"):
+        layer[f"{prefix}.{norm}.weight"] = torch.ones(dim)
+        layer[f"{prefix}.{norm}.bias"] = torch.zeros(dim)
+    return layer
+
+
+def deepen_coarse_blocks(
+    state: dict[str, torch.Tensor], config: ModelConfig, layers: int, seed: int = 0
+) -> tuple[dict[str, torch.Tensor], ModelConfig]:
+    """The state dict and config with `layers` attention layers in each coarse block."""
+    old = config.coarse_depth
+    if layers <= old:
+        raise ValueError(f"--coarse-layers {layers} must exceed the model's {old}")
+    generator = torch.Generator().manual_seed(seed)
+    grown = {key: value.float() for key, value in state.items()}
+    for block in COARSE_BLOCKS:
+        for index in range(old, layers):
+            grown.update(_new_layer(f"{block}.layers.{index}", config, generator))
+        # Post-norm: the last layer's final scale and shift move to the new last layer.
+        for part in ("weight", "bias"):
+            old_norm, new_norm = (f"{block}.layers.{i}.norm3.{part}" for i in (old - 1, layers - 1))
+            grown[new_norm] = grown[old_norm]
+            grown[old_norm] = (
+                torch.ones_like(grown[old_norm])
+                if part == "weight"
+                else (torch.zeros_like(grown[old_norm]))
+            )
+    return grown, dataclasses.replace(config, coarse_layers_per_block=layers)
+
+
 def grow_file(
     source: Path,
     out: Path,
     ffn_dim: int | None = None,
     seed: int = 0,
     backbone_widths: tuple[int, int, int] | None = None,
+    coarse_layers: int | None = None,
 ) -> ModelConfig:
-    """Write the widened weights of `source` to `out` (new), with its training record."""
-    if ffn_dim is None and backbone_widths is None:
-        raise ValueError("nothing to grow: give --ffn-dim and/or --backbone-widths")
+    """Write the grown weights of `source` to `out` (new), with its training record."""
+    if ffn_dim is None and backbone_widths is None and coarse_layers is None:
+        raise ValueError(
+            "nothing to grow: give --ffn-dim, --backbone-widths and/or --coarse-layers"
+        )
     if out.exists():
         raise FileExistsError(f"{out} exists; choose a new --out")
     raw = read_checkpoint_payload(source)
@@ -147,6 +211,8 @@ def grow_file(
         state, config = widen_feed_forward(state, config, ffn_dim, seed)
     if backbone_widths is not None:
         state, config = widen_backbone(state, config, backbone_widths, seed)
+    if coarse_layers is not None:
+        state, config = deepen_coarse_blocks(state, config, coarse_layers, seed)
     carried = {k: raw[k] for k in ("train_state", "training_record") if k in raw}
     payload = {"model": state, "config": dataclasses.asdict(config), **carried}
     buffer = io.BytesIO()
@@ -162,18 +228,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--backbone-widths", type=int, nargs=3, metavar="W", help="new feature-encoder widths"
     )
+    parser.add_argument(
+        "--coarse-layers", type=int, metavar="N", help="attention layers per 18/9-grid block"
+    )
     parser.add_argument("--out", type=Path, required=True, help="file to write (new)")
     parser.add_argument("--seed", type=int, default=0, help="draws of the new units")
     args = parser.parse_args(argv)
     widths = None if args.backbone_widths is None else tuple(args.backbone_widths)
     try:
-        config = grow_file(args.weights, args.out, args.ffn_dim, args.seed, widths)
+        config = grow_file(
+            args.weights, args.out, args.ffn_dim, args.seed, widths, args.coarse_layers
+        )
     except (CheckpointError, ValueError, FileExistsError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     print(
         f"wrote {args.out}: feed-forward width {config.ffn_dim}, feature-encoder widths "
-        f"{' '.join(map(str, config.backbone_widths))} ({config.to_json()})"
+        f"{' '.join(map(str, config.backbone_widths))}, coarse-block layers "
+        f"{config.coarse_depth} ({config.to_json()})"
     )
     return 0
 
