@@ -6,10 +6,11 @@
 # crops (the bottleneck there: about 100 samples/s in session 27), hence --sample-reuse 2.
 #
 # usage (repository root): [DEVICE=cuda] [STEPS=N] [LR=2e-4] [INIT=training/resume/bb24_s28d_end.pt]
-#        [BACKBONE_WIDTHS="24 48 72"] [PHOTOMETRIC=60] bash scripts/gpu_train.sh [MINUTES]
+#        [BACKBONE_WIDTHS="24 48 72"] [COARSE_LAYERS=3] [PHOTOMETRIC=60] bash scripts/gpu_train.sh [MINUTES]
 # INIT: the weights to continue from (training/resume/README.md says which is the long run's end).
-# BACKBONE_WIDTHS: first widen INIT's feature encoder to these widths (`training.grow`; same
-# output, more capacity); the run then trains the wider model (its config comes from INIT).
+# BACKBONE_WIDTHS / COARSE_LAYERS: first widen INIT's feature encoder to these widths and/or
+# deepen its 18/9-grid attention blocks to this many layers (`training.grow`; same output,
+# more capacity); the run then trains the grown model (its config comes from INIT).
 # Afterwards, here: score $OUT's end.pt against the default (training/resume/README.md), keep
 # it under training/resume/ if it is better, and record the run in MODEL_CARD.md. STEPS is
 # the lr cycle's length; unset, a one-minute probe measures samples/s and sizes it to end
@@ -28,11 +29,18 @@ run=/tmp/gpu_run
 rm -rf "$run" /tmp/gpu_probe  # scratch: a warm machine keeps the last call's
 mkdir -p "$out"
 init="${INIT:-training/resume/bb24_s28d_end.pt}"
+grow_args=()
 if [ -n "${BACKBONE_WIDTHS:-}" ]; then
+    # shellcheck disable=SC2206  # three widths, split on purpose
+    grow_args+=(--backbone-widths $BACKBONE_WIDTHS)
+fi
+if [ -n "${COARSE_LAYERS:-}" ]; then
+    grow_args+=(--coarse-layers "$COARSE_LAYERS")
+fi
+if [ ${#grow_args[@]} -gt 0 ]; then
     rm -f /tmp/gpu_grown.pt
-    # shellcheck disable=SC2086  # three widths, split on purpose
-    python3 -m doctrpp.training.grow "$init" --backbone-widths $BACKBONE_WIDTHS \
-        --out /tmp/gpu_grown.pt | tee "$out/grow.log"
+    python3 -m doctrpp.training.grow "$init" "${grow_args[@]}" --out /tmp/gpu_grown.pt \
+        | tee "$out/grow.log"
     init=/tmp/gpu_grown.pt
 fi
 started=$SECONDS
