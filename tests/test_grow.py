@@ -103,14 +103,11 @@ def test_the_new_units_learn_from_the_first_step(tiny_model):
 def test_deeper_coarse_blocks_compute_the_same_map(tiny_model, report_difference):
     # Norms as training leaves them (not 1 and 0), so moving the last scale and shift counts.
     generator = torch.Generator().manual_seed(2)
-    state = {
-        key: (torch.rand(value.shape, generator=generator) * 0.4 + 0.8)
-        if ".norm" in key and key.endswith("weight")
-        else (torch.rand(value.shape, generator=generator) * 0.2 - 0.1)
-        if ".norm" in key
-        else value
-        for key, value in tiny_model.state_dict().items()
-    }
+    state = tiny_model.state_dict()
+    for key, value in state.items():
+        if ".norm" in key:  # weights in [0.8, 1.2], biases in [-0.1, 0.1]
+            low, spread = (0.8, 0.4) if key.endswith("weight") else (-0.1, 0.2)
+            state[key] = torch.rand(value.shape, generator=generator) * spread + low
     source = _as_model(state, tiny_model.config)
     grown = _as_model(*deepen_coarse_blocks(state, tiny_model.config, 3))
     assert grown.config == dataclasses.replace(tiny_model.config, coarse_layers_per_block=3)

@@ -176,15 +176,11 @@ def deepen_coarse_blocks(
     for block in COARSE_BLOCKS:
         for index in range(old, layers):
             grown.update(_new_layer(f"{block}.layers.{index}", config, generator))
-        # Post-norm: the last layer's final scale and shift move to the new last layer.
+        # Post-norm: the last layer's final scale and shift move to the new last layer,
+        # which starts plain (1, 0); the two swap.
+        last, new_last = (f"{block}.layers.{i}.norm3." for i in (old - 1, layers - 1))
         for part in ("weight", "bias"):
-            old_norm, new_norm = (f"{block}.layers.{i}.norm3.{part}" for i in (old - 1, layers - 1))
-            grown[new_norm] = grown[old_norm]
-            grown[old_norm] = (
-                torch.ones_like(grown[old_norm])
-                if part == "weight"
-                else (torch.zeros_like(grown[old_norm]))
-            )
+            grown[last + part], grown[new_last + part] = grown[new_last + part], grown[last + part]
     return grown, dataclasses.replace(config, coarse_layers_per_block=layers)
 
 
