@@ -48,6 +48,10 @@ class Normalise(nn.Module):
         return pixels_to_normalised(backward_map)
 
 
+# The attention blocks on the 18x18 and 9x9 grids: their depth is `config.coarse_depth`.
+COARSE_BLOCKS = ("encoder_block1", "encoder_block2", "decoder_block0", "decoder_block1")
+
+
 class DocTrPP(nn.Module):
     """image (N, 3, 288, 288) RGB in [0, 1] -> backward map (N, 2, 288, 288) in pixels."""
 
@@ -62,15 +66,19 @@ class DocTrPP(nn.Module):
         )
         grids = (FEATURE_GRID, FEATURE_GRID // 2, FEATURE_GRID // 4)  # 36, 18, 9
         self.fnet = FeatureEncoder(config.backbone_widths, dim)
-        coarse = config.coarse_depth
-        self.encoder_block0 = AttentionBlock(dim, heads, ffn, depth, grids[0])
-        self.encoder_block1 = AttentionBlock(dim, heads, ffn, coarse, grids[1])
-        self.encoder_block2 = AttentionBlock(dim, heads, ffn, coarse, grids[2])
+
+        def block(name: str, grid: int) -> AttentionBlock:
+            layers = config.coarse_depth if name in COARSE_BLOCKS else depth
+            return AttentionBlock(dim, heads, ffn, layers, grid)
+
+        self.encoder_block0 = block("encoder_block0", grids[0])
+        self.encoder_block1 = block("encoder_block1", grids[1])
+        self.encoder_block2 = block("encoder_block2", grids[2])
         self.down_layer0 = nn.Conv2d(dim, dim, 3, stride=2, padding=1)
         self.down_layer1 = nn.Conv2d(dim, dim, 3, stride=2, padding=1)
-        self.decoder_block0 = AttentionBlock(dim, heads, ffn, coarse, grids[2])
-        self.decoder_block1 = AttentionBlock(dim, heads, ffn, coarse, grids[1])
-        self.decoder_block2 = AttentionBlock(dim, heads, ffn, depth, grids[0])
+        self.decoder_block0 = block("decoder_block0", grids[2])
+        self.decoder_block1 = block("decoder_block1", grids[1])
+        self.decoder_block2 = block("decoder_block2", grids[0])
         self.query_embed = nn.Embedding(grids[2] * grids[2], dim)
         self.update_block = UpdateBlock(dim)
         self.backward_map = BackwardMap()

@@ -42,6 +42,7 @@ from doctrpp.export.checkpoint import (
     split_checkpoint,
 )
 from doctrpp.export.config import ModelConfig
+from doctrpp.export.model import COARSE_BLOCKS
 from doctrpp.files import write_bytes_atomically
 
 FEED_FORWARD_IN, FEED_FORWARD_OUT = ".linear1.", ".linear2."
@@ -131,9 +132,6 @@ def widen_backbone(
             generator,
         )
     return grown, dataclasses.replace(config, backbone_widths=widths)
-
-
-COARSE_BLOCKS = ("encoder_block1", "encoder_block2", "decoder_block0", "decoder_block1")
 
 
 def _new_attention(prefix: str, dim: int, generator) -> dict[str, torch.Tensor]:
