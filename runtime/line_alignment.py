@@ -10,9 +10,7 @@ the next. A low-order polynomial of that slope across the width, integrated, is 
 vertical offset of the lines in each band; the map samples each column that much
 lower or higher. Only neighbours are compared, so columns with staggered baselines are
 never forced level with each other; bands without text give no slope, and the offset is
-held level beyond the measured span. Pages without text lines come out unchanged, and a
-correction is kept only if the rendering's ink rows come out sharper than before
-(`levelness`): slopes summed across the width can drift into a tilt.
+held level beyond the measured span. Pages without text lines come out unchanged.
 
 It can only correct vertical offsets that vary smoothly across the width (bowed,
 tilted, folded lines), not stretching along the lines.
@@ -214,36 +212,19 @@ def shift_rows(backward_map: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     return cv2.remap(padded, columns, rows, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
 
 
-def levelness(ink: np.ndarray, windows: int) -> float:
-    """How level the text lines are: the variance of each window's full-width ink row
-    profile, summed (lines that tilt or bow smear their rows into each other)."""
-    height = 2 * ink.shape[0] // (windows + 1)
-    return sum(
-        float(ink[t * height // 2 : t * height // 2 + height].mean(axis=1).var())
-        for t in range(windows)
-    )
-
-
 def align_text_lines(
     image: np.ndarray, backward_map: np.ndarray, params: LineAlignment | None = None
 ) -> np.ndarray:
     """The backward map (S, S, 2, normalised) with its rows shifted so that the text lines
-    of the rectified `image` come out level (unchanged where no lines are found, and where
-    a correction would leave the lines less level than they were)."""
+    of the rectified `image` come out level (unchanged where no lines are found)."""
     params = params or LineAlignment()
     backward_map = np.asarray(backward_map, np.float32)
     gray = gray_uint8(image, 2 * params.render_size)
-    ink = ink_mask(render_gray(gray, backward_map, params.render_size))
     for _ in range(params.iterations):
+        ink = ink_mask(render_gray(gray, backward_map, params.render_size))
         field = offset_field(ink, params)
         if not field.any():
             break
         offsets = field_on_grid(field, backward_map.shape[0], params.render_size)
-        candidate = shift_rows(backward_map, offsets)
-        candidate_ink = ink_mask(render_gray(gray, candidate, params.render_size))
-        # Slopes summed across the width can drift into a tilt (a title block or a
-        # column of another pitch): keep a correction only if the rows got sharper.
-        if levelness(candidate_ink, params.windows) < levelness(ink, params.windows):
-            break
-        backward_map, ink = candidate, candidate_ink
+        backward_map = shift_rows(backward_map, offsets)
     return np.ascontiguousarray(backward_map)
