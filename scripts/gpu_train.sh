@@ -14,7 +14,7 @@
 # Afterwards, here: score $OUT's end.pt against the default (training/resume/README.md), keep
 # it under training/resume/ if it is better, and record the run in MODEL_CARD.md. STEPS is
 # the lr cycle's length; unset, a one-minute probe measures samples/s and sizes it to end
-# inside MINUTES. fp32 like the CPU runs (the model is small; generation is the bottleneck).
+# inside MINUTES. fp32 (the model is small; generation is the bottleneck there).
 # PHOTOMETRIC: the weight of `--photometric-loss` (60, the shipped default's since session
 # 29; 0 trains without it). On CUDA the data workers are spawned with one OpenCV thread each
 # (`--worker-start auto`; not yet measured there).
