@@ -483,19 +483,40 @@ def test_photometric_loss_is_zero_on_the_true_map_and_pulls_a_shifted_one_back()
     )
     both = map_loss(shifted, target, 0.0, images, 5.0)
     assert torch.allclose(both, map_l1(shifted, target) + 5.0 * loss)
-    with pytest.raises(ValueError, match="needs the input images"):
+    with pytest.raises(ValueError, match="need the input images"):
         map_loss(shifted, target, 0.0, None, 5.0)
+
+
+def test_ms_ssim_loss_is_zero_on_the_true_map_and_grows_with_a_shift():
+    from doctrpp.training.losses import map_l1, map_loss, rectified_image_ms_ssim
+
+    sample = generate(3, "complete")
+    images, target = (t[None] for t in to_tensors(sample.image, sample.backward_map))
+    assert float(rectified_image_ms_ssim(images, target, target)) == pytest.approx(0.0, abs=1e-5)
+    losses = []
+    for shift in (1.0, 3.0):
+        shifted = (target + torch.tensor([shift, 0.0]).view(1, 2, 1, 1)).requires_grad_(True)
+        loss = rectified_image_ms_ssim(images, shifted, target)
+        (gradient,) = torch.autograd.grad(loss, shifted)
+        assert torch.isfinite(gradient).all() and float(gradient.abs().sum()) > 0
+        losses.append(float(loss.detach()))
+    print(f"1 - MS-SSIM at 1 px / 3 px shift: {losses[0]:.4f} / {losses[1]:.4f}")
+    assert 1e-3 < losses[0] < losses[1] < 1.0
+    both = map_loss(shifted, target, 0.0, images, 0.0, 2.0)
+    assert torch.allclose(both, map_l1(shifted, target) + 2.0 * loss)
+    with pytest.raises(ValueError, match="need the input images"):
+        map_loss(shifted, target, 0.0, None, 0.0, 2.0)
 
 
 def test_loss_terms_train_and_the_cli_rejects_negative_weights(tmp_path, capsys):
     from doctrpp.cli import main
 
     settings = quick_settings(
-        tmp_path / "g", kind="complete", gradient_loss=1.0, photometric_loss=10.0
+        tmp_path / "g", kind="complete", gradient_loss=1.0, photometric_loss=10.0, ms_ssim_loss=2.0
     )
     state = train(settings)
     assert state["step"] == 2
-    for flag in ("--gradient-loss", "--photometric-loss"):
+    for flag in ("--gradient-loss", "--photometric-loss", "--ms-ssim-loss"):
         code = main(["train", "--out", str(tmp_path / "r"), "--config", "tiny", flag, "-1"])
         assert code == 2
         assert f"{flag} must be >= 0" in capsys.readouterr().err

@@ -145,6 +145,14 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "true one (intensities 0-1, at a few blur widths), which weighs map errors by the "
         "print they move (default 0)",
     )
+    p.add_argument(
+        "--ms-ssim-loss",
+        type=float,
+        default=0.0,
+        metavar="W",
+        help="add W times 1 - MS-SSIM between those two rectified crops (unmasked, gray, the "
+        "metric's 5-level weights), the held-out score's own measure (default 0)",
+    )
     p.set_defaults(handler=run)
 
 
@@ -216,6 +224,8 @@ def run(args: argparse.Namespace) -> int:
         raise CliError("--gradient-loss must be >= 0")
     if args.photometric_loss < 0:
         raise CliError("--photometric-loss must be >= 0")
+    if args.ms_ssim_loss < 0:
+        raise CliError("--ms-ssim-loss must be >= 0")
     if args.page_reuse < 1:
         raise CliError("--page-reuse must be >= 1")
     if args.sample_reuse < 1:
@@ -255,6 +265,7 @@ def run(args: argparse.Namespace) -> int:
         sample_reuse=args.sample_reuse,
         gradient_loss=args.gradient_loss,
         photometric_loss=args.photometric_loss,
+        ms_ssim_loss=args.ms_ssim_loss,
         worker_start=args.worker_start,
         seed=args.seed,
     )

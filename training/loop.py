@@ -57,6 +57,7 @@ class TrainSettings:
     real_photos_count: int = 16  # photos used (each as a complete, partial and none crop)
     gradient_loss: float = 0.0  # weight of L1 on the maps' 8-px differences (0: the paper's loss)
     photometric_loss: float = 0.0  # weight of L1 between crops rectified by predicted/true maps
+    ms_ssim_loss: float = 0.0  # weight of 1 - MS-SSIM between those two rectified crops
     worker_start: str = "auto"  # fork | spawn | auto (spawn on CUDA, where workers are many)
     snapshots: bool = True  # keep a weights-only snapshot at each validation (to choose from)
 
@@ -361,7 +362,12 @@ def train(s: TrainSettings) -> dict:
             with torch.autocast(env.device.type, dtype=torch.bfloat16, enabled=s.bf16):
                 predicted = net(images)
             loss = map_loss(
-                predicted.float(), targets, s.gradient_loss, images.float(), s.photometric_loss
+                predicted.float(),
+                targets,
+                s.gradient_loss,
+                images.float(),
+                s.photometric_loss,
+                s.ms_ssim_loss,
             )
             optimiser.zero_grad(set_to_none=True)
             loss.backward()

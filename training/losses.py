@@ -57,20 +57,73 @@ def rectified_image_l1(
     return torch.stack(losses).mean()
 
 
+# The published MS-SSIM level weights (benchmarks.metrics), the score the held-out set uses.
+MS_SSIM_LEVEL_WEIGHTS = (0.0448, 0.2856, 0.3001, 0.2363, 0.1333)
+_GRAY = (0.299, 0.587, 0.114)  # Rec. 601 on RGB, as the metric's grayscale
+
+
+def _gaussian_blur(gray: torch.Tensor) -> torch.Tensor:
+    """11x11, sigma 1.5, replicated borders: the metric's SSIM window, separably."""
+    offsets = torch.arange(11, dtype=gray.dtype, device=gray.device) - 5
+    kernel = torch.exp(-(offsets**2) / (2 * 1.5**2))
+    kernel = kernel / kernel.sum()
+    padded = F.pad(gray, (5, 5, 5, 5), mode="replicate")
+    blurred = F.conv2d(padded, kernel.view(1, 1, 1, 11))
+    return F.conv2d(blurred, kernel.view(1, 1, 11, 1))
+
+
+def _ssim(x: torch.Tensor, y: torch.Tensor) -> torch.Tensor:
+    """Mean SSIM per image (B,) of gray images in [0, 1] (K = 0.01, 0.03)."""
+    c1, c2 = 0.01**2, 0.03**2
+    mu_x, mu_y = _gaussian_blur(x), _gaussian_blur(y)
+    var_x = _gaussian_blur(x * x) - mu_x**2
+    var_y = _gaussian_blur(y * y) - mu_y**2
+    cov = _gaussian_blur(x * y) - mu_x * mu_y
+    ssim = ((2 * mu_x * mu_y + c1) * (2 * cov + c2)) / (
+        (mu_x**2 + mu_y**2 + c1) * (var_x + var_y + c2)
+    )
+    return ssim.flatten(1).mean(1)
+
+
+def rectified_image_ms_ssim(
+    images: torch.Tensor, predicted: torch.Tensor, target: torch.Tensor
+) -> torch.Tensor:
+    """1 - MS-SSIM between the crop rectified by the predicted map and by the true one.
+
+    Unmasked, like the held-out score: black pulled in from outside the crop counts. The
+    metric's weighted sum over a 5-level pyramid, in float32 (2x2 means for pyrDown).
+    """
+    weights = torch.tensor(_GRAY, dtype=torch.float32, device=images.device).view(1, 3, 1, 1)
+    images = images.float()
+    with torch.no_grad():
+        expected = (_remap(images, target.float()) * weights).sum(1, keepdim=True)
+    rectified = (_remap(images, predicted.float()) * weights).sum(1, keepdim=True)
+    total = torch.zeros(images.shape[0], device=images.device)
+    for level, weight in enumerate(MS_SSIM_LEVEL_WEIGHTS):
+        total = total + weight * _ssim(rectified, expected)
+        if level < len(MS_SSIM_LEVEL_WEIGHTS) - 1:
+            rectified, expected = F.avg_pool2d(rectified, 2), F.avg_pool2d(expected, 2)
+    return (sum(MS_SSIM_LEVEL_WEIGHTS) - total).mean()
+
+
 def map_loss(
     predicted: torch.Tensor,
     target: torch.Tensor,
     gradient_weight: float = 0.0,
     images: torch.Tensor | None = None,
     photometric_weight: float = 0.0,
+    ms_ssim_weight: float = 0.0,
 ) -> torch.Tensor:
     """L1 on the map, plus `gradient_weight` times L1 on its 8-pixel differences, plus
-    `photometric_weight` times `rectified_image_l1` (which needs the input `images`)."""
+    `photometric_weight` times `rectified_image_l1` and `ms_ssim_weight` times
+    `rectified_image_ms_ssim` (both need the input `images`)."""
     loss = map_l1(predicted, target)
     if gradient_weight:
         loss = loss + gradient_weight * map_gradient_l1(predicted, target)
+    if (photometric_weight or ms_ssim_weight) and images is None:
+        raise ValueError("the photometric terms need the input images")
     if photometric_weight:
-        if images is None:
-            raise ValueError("the photometric term needs the input images")
         loss = loss + photometric_weight * rectified_image_l1(images, predicted, target)
+    if ms_ssim_weight:
+        loss = loss + ms_ssim_weight * rectified_image_ms_ssim(images, predicted, target)
     return loss
