@@ -5,6 +5,7 @@ from __future__ import annotations
 import torch
 import torch.nn.functional as F
 
+from ..benchmarks.metrics import MS_SSIM_WEIGHTS
 from ..contract import pixels_to_normalised
 
 
@@ -57,8 +58,6 @@ def rectified_image_l1(
     return torch.stack(losses).mean()
 
 
-# The published MS-SSIM level weights (benchmarks.metrics), the score the held-out set uses.
-MS_SSIM_LEVEL_WEIGHTS = (0.0448, 0.2856, 0.3001, 0.2363, 0.1333)
 _GRAY = (0.299, 0.587, 0.114)  # Rec. 601 on RGB, as the metric's grayscale
 
 
@@ -73,12 +72,15 @@ def _gaussian_blur(gray: torch.Tensor) -> torch.Tensor:
 
 
 def _ssim(x: torch.Tensor, y: torch.Tensor) -> torch.Tensor:
-    """Mean SSIM per image (B,) of gray images in [0, 1] (K = 0.01, 0.03)."""
+    """Mean SSIM per image (B,) of gray images (B x 1 x H x W) in [0, 1] (K = 0.01, 0.03)."""
     c1, c2 = 0.01**2, 0.03**2
-    mu_x, mu_y = _gaussian_blur(x), _gaussian_blur(y)
-    var_x = _gaussian_blur(x * x) - mu_x**2
-    var_y = _gaussian_blur(y * y) - mu_y**2
-    cov = _gaussian_blur(x * y) - mu_x * mu_y
+    moments = torch.cat([x, y, x * x, y * y, x * y], 1)  # blurred in one pass
+    batch, channels, height, width = moments.shape
+    blurred = _gaussian_blur(moments.reshape(batch * channels, 1, height, width))
+    mu_x, mu_y, xx, yy, xy = blurred.reshape(batch, channels, height, width).unbind(1)
+    var_x = xx - mu_x**2
+    var_y = yy - mu_y**2
+    cov = xy - mu_x * mu_y
     ssim = ((2 * mu_x * mu_y + c1) * (2 * cov + c2)) / (
         (mu_x**2 + mu_y**2 + c1) * (var_x + var_y + c2)
     )
@@ -99,11 +101,11 @@ def rectified_image_ms_ssim(
         expected = (_remap(images, target.float()) * weights).sum(1, keepdim=True)
     rectified = (_remap(images, predicted.float()) * weights).sum(1, keepdim=True)
     total = torch.zeros(images.shape[0], device=images.device)
-    for level, weight in enumerate(MS_SSIM_LEVEL_WEIGHTS):
+    for level, weight in enumerate(MS_SSIM_WEIGHTS):
         total = total + weight * _ssim(rectified, expected)
-        if level < len(MS_SSIM_LEVEL_WEIGHTS) - 1:
+        if level < len(MS_SSIM_WEIGHTS) - 1:
             rectified, expected = F.avg_pool2d(rectified, 2), F.avg_pool2d(expected, 2)
-    return (sum(MS_SSIM_LEVEL_WEIGHTS) - total).mean()
+    return (sum(MS_SSIM_WEIGHTS) - total).mean()
 
 
 def map_loss(
