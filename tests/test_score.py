@@ -7,7 +7,12 @@ import json
 import numpy as np
 import pytest
 
-from doctrpp.training.validate import paired_difference, validation_set
+from doctrpp.training.validate import (
+    load_validation_set,
+    paired_difference,
+    save_validation_set,
+    validation_set,
+)
 
 
 def test_a_later_start_continues_the_same_validation_stream():
@@ -19,6 +24,17 @@ def test_a_later_start_continues_the_same_validation_stream():
         assert np.array_equal(a.backward_map, b.backward_map)
     with pytest.raises(ValueError, match="validation crops"):
         validation_set(2, start=-1)
+
+
+def test_a_frozen_validation_set_loads_back_unchanged(tmp_path):
+    items = validation_set(3, start=5)
+    path = tmp_path / "frozen.npz"
+    save_validation_set(items, path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["frozen.npz"]  # no partial left
+    for a, b in zip(items, load_validation_set(path), strict=True):
+        assert a.kind == b.kind
+        assert np.array_equal(a.image, b.image)
+        assert np.array_equal(a.backward_map, b.backward_map)
 
 
 def test_paired_difference_is_the_mean_per_crop_difference_with_its_standard_error():
@@ -46,6 +62,19 @@ def test_score_compares_each_file_with_the_first_on_fresh_crops(tiny_checkpoint,
     for metric in ("map_error_px", "ms_ssim", "local_distortion"):  # a file against itself
         assert paired[f"paired_{metric}/all"] == [0.0, 0.0]
     assert len(lines) == 4
+
+
+def test_score_freezes_its_crops_once_and_reuses_them(tiny_checkpoint, tmp_path, capsys):
+    from doctrpp.training.score import main as score
+
+    frozen = tmp_path / "v.npz"
+    args = [str(tiny_checkpoint), "--validation-size", "2", "--frozen-validation", str(frozen)]
+    assert score(args) == 0
+    first = capsys.readouterr().out
+    assert frozen.is_file()
+    # A different start or size no longer matters: the frozen crops are the yardstick.
+    assert score([*args, "--validation-start", "48"]) == 0
+    assert capsys.readouterr().out == first
 
 
 def test_score_refuses_bad_arguments_in_one_line(tmp_path, capsys):

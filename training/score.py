@@ -32,7 +32,15 @@ from pathlib import Path
 from doctrpp.export.checkpoint import load_model
 
 from .realcheck import real_photo_set, score_real, validation_maps
-from .validate import crop_scores, paired_difference, score_maps, summarise_crops, validation_set
+from .validate import (
+    crop_scores,
+    load_validation_set,
+    paired_difference,
+    save_validation_set,
+    score_maps,
+    summarise_crops,
+    validation_set,
+)
 
 # Per-crop measures compared crop by crop between weights files.
 PAIRED_METRICS = ("map_error_px", "ms_ssim", "local_distortion")
@@ -124,13 +132,25 @@ def main(argv: list[str] | None = None) -> int:
         default=288,
         help="px of the generated validation crops (their maps stay 288)",
     )
+    parser.add_argument(
+        "--frozen-validation",
+        type=Path,
+        metavar="NPZ",
+        help="score on the validation crops frozen in this file; where it does not exist, "
+        "generate them and freeze them there (keeps one yardstick across generator changes)",
+    )
     args = parser.parse_args(argv)
     if args.validation_size < 1 or args.validation_start < 0:
         parser.error("--validation-size must be >= 1 and --validation-start >= 0")
     missing = [str(p) for p in args.weights if not p.is_file()]
     if missing:
         parser.error(f"no such weights file: {', '.join(missing)}")
-    validation = validation_set(args.validation_size, args.crop_size, args.validation_start)
+    if args.frozen_validation and args.frozen_validation.is_file():
+        validation = load_validation_set(args.frozen_validation)
+    else:
+        validation = validation_set(args.validation_size, args.crop_size, args.validation_start)
+        if args.frozen_validation:
+            save_validation_set(validation, args.frozen_validation)
     real_items = real_photo_set(args.real_photos, args.photos) if args.real_photos else []
     rows = {}
     for path in [None, *args.weights]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import torch
@@ -38,6 +39,27 @@ def validation_set(
         sample = generate(VALIDATION_SEED_OFFSET + i, kind_for_index(i), size=size)
         items.append(ValidationItem(sample.kind, sample.image, sample.backward_map))
     return items
+
+
+def save_validation_set(items: list[ValidationItem], path: Path) -> None:
+    """Freeze a validation set (kinds, crops, maps) in one .npz, written atomically, so that
+    later generator changes do not move the yardstick old and new weights are paired on."""
+    path = Path(path)
+    partial = path.with_name(path.name + ".partial.npz")
+    np.savez(
+        partial,
+        kinds=np.array([it.kind for it in items]),
+        images=np.stack([it.image for it in items]),
+        maps=np.stack([it.backward_map for it in items]),
+    )
+    partial.replace(path)
+
+
+def load_validation_set(path: Path) -> list[ValidationItem]:
+    """A set written by `save_validation_set`."""
+    with np.load(Path(path)) as data:
+        kinds, images, maps = data["kinds"], data["images"], data["maps"]
+    return [ValidationItem(str(k), i, m) for k, i, m in zip(kinds, images, maps, strict=True)]
 
 
 def crop_scores(items: list[ValidationItem], predicted: list[np.ndarray]) -> list[dict[str, float]]:
