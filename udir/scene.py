@@ -129,9 +129,11 @@ class Scene:
         page = cv2.remap(
             texture, u * (tw - 1), v * (th - 1), cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
         ).astype(np.float32)
-        # Anti-aliased page edge: coverage from the distance (in output pixels) to the border.
-        pixel_u = max(float(np.ptp(u)) / max(w, 1), 1e-6)
-        pixel_v = max(float(np.ptp(v)) / max(h, 1), 1e-6)
+        # Anti-aliased page edge: coverage from the distance (in output pixels) to the border,
+        # with the page's local scale (the whole crop's span of u, v overstates it where the
+        # surface, extrapolated off the page, runs steep: a blurred edge several px wide).
+        pixel_u = np.maximum(np.hypot(*np.gradient(u)), 1e-6)
+        pixel_v = np.maximum(np.hypot(*np.gradient(v)), 1e-6)
         inside = np.minimum.reduce([u / pixel_u, (1 - u) / pixel_u, v / pixel_v, (1 - v) / pixel_v])
         coverage = np.clip(inside + 0.5, 0, 1)[..., None]
         if photometric:
