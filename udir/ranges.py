@@ -91,7 +91,7 @@ CREASE_SHARPNESS = (0.01, 0.03)
 # off (4.8 degrees, 1.24x, 0.68 of the frame: many steep creases tilt the whole sheet).
 # Ranges that close most of it (aligned share 0.85, aligned tilt 0.08, handheld tilt 0.25
 # and roll 0.1, fold slope 0.8, crease slope 0.08-0.35, complete margin 0-0.035: 0.80 of
-# the frame, 2.2 degrees, 1.13x) trained one cycle from the default that ended level on
+# the frame, 2.2 degrees, 1.13x) trained two cycles from the default that ended level on
 # their own crops and behind on these, with fewer letters read on the real photos: not
 # kept (docs/training_history.md, "Session 33").
 ALIGNED_CAMERA_SHARE = 0.65
