@@ -20,6 +20,9 @@ import numpy as np
 
 # As published (they sum to 1.0001, so identical images score 1.0001).
 MS_SSIM_WEIGHTS = (0.0448, 0.2856, 0.3001, 0.2363, 0.1333)
+SSIM_WINDOW = 11  # px, Gaussian window side
+SSIM_SIGMA = 1.5  # px
+SSIM_K = (0.01, 0.03)  # stabilisers, times the data range
 TARGET_AREA = 598_400
 
 
@@ -58,10 +61,11 @@ def ssim_map(x: np.ndarray, y: np.ndarray, data_range: float = 255.0) -> np.ndar
     """Per-pixel SSIM; borders use replicated pixels (as Matlab's ssim)."""
     x = x.astype(np.float64)
     y = y.astype(np.float64)
-    c1, c2 = (0.01 * data_range) ** 2, (0.03 * data_range) ** 2
+    c1, c2 = (SSIM_K[0] * data_range) ** 2, (SSIM_K[1] * data_range) ** 2
 
     def blur(a):
-        return cv2.GaussianBlur(a, (11, 11), 1.5, borderType=cv2.BORDER_REPLICATE)
+        window = (SSIM_WINDOW, SSIM_WINDOW)
+        return cv2.GaussianBlur(a, window, SSIM_SIGMA, borderType=cv2.BORDER_REPLICATE)
 
     mu_x, mu_y = blur(x), blur(y)
     var_x = blur(x * x) - mu_x**2

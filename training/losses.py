@@ -5,7 +5,7 @@ from __future__ import annotations
 import torch
 import torch.nn.functional as F
 
-from ..benchmarks.metrics import MS_SSIM_WEIGHTS
+from ..benchmarks.metrics import MS_SSIM_WEIGHTS, SSIM_K, SSIM_SIGMA, SSIM_WINDOW
 from ..contract import pixels_to_normalised
 
 
@@ -62,18 +62,19 @@ _GRAY = (0.299, 0.587, 0.114)  # Rec. 601 on RGB, as the metric's grayscale
 
 
 def _gaussian_blur(gray: torch.Tensor) -> torch.Tensor:
-    """11x11, sigma 1.5, replicated borders: the metric's SSIM window, separably."""
-    offsets = torch.arange(11, dtype=gray.dtype, device=gray.device) - 5
-    kernel = torch.exp(-(offsets**2) / (2 * 1.5**2))
+    """The metric's SSIM window (`SSIM_WINDOW`, `SSIM_SIGMA`), replicated borders, separably."""
+    half = SSIM_WINDOW // 2
+    offsets = torch.arange(SSIM_WINDOW, dtype=gray.dtype, device=gray.device) - half
+    kernel = torch.exp(-(offsets**2) / (2 * SSIM_SIGMA**2))
     kernel = kernel / kernel.sum()
-    padded = F.pad(gray, (5, 5, 5, 5), mode="replicate")
-    blurred = F.conv2d(padded, kernel.view(1, 1, 1, 11))
-    return F.conv2d(blurred, kernel.view(1, 1, 11, 1))
+    padded = F.pad(gray, (half, half, half, half), mode="replicate")
+    blurred = F.conv2d(padded, kernel.view(1, 1, 1, SSIM_WINDOW))
+    return F.conv2d(blurred, kernel.view(1, 1, SSIM_WINDOW, 1))
 
 
 def _ssim(x: torch.Tensor, y: torch.Tensor) -> torch.Tensor:
-    """Mean SSIM per image (B,) of gray images (B x 1 x H x W) in [0, 1] (K = 0.01, 0.03)."""
-    c1, c2 = 0.01**2, 0.03**2
+    """Mean SSIM per image (B,) of gray images (B x 1 x H x W) in [0, 1] (the metric's K)."""
+    c1, c2 = SSIM_K[0] ** 2, SSIM_K[1] ** 2
     moments = torch.cat([x, y, x * x, y * y, x * y], 1)  # blurred in one pass
     batch, channels, height, width = moments.shape
     blurred = _gaussian_blur(moments.reshape(batch * channels, 1, height, width))
