@@ -86,8 +86,8 @@ CREASE_SHARPNESS = (0.01, 0.03)
 # Session 33 measured the gap that is left (the default's maps of the 96 docunet_dev photos,
 # whole, against the true maps of generated complete crops; on generated crops the model
 # reproduces these measures to a few per cent): real pages fill 0.83 of the frame (median;
-# ours 0.70), their top and bottom edges turn 1.4 degrees (ours 3.3; q90 4.7 against 12) and
-# opposite edges differ 1.08x in length (ours 1.16-1.21); crumpled pages are the furthest
+# ours 0.69), their top and bottom edges turn 1.4 degrees (ours 3.1; q90 4.7 against 15.6)
+# and opposite edges differ 1.08x in length (ours 1.21x); crumpled pages are the furthest
 # off (4.8 degrees, 1.24x, 0.68 of the frame: many steep creases tilt the whole sheet).
 # Ranges that close most of it (aligned share 0.85, aligned tilt 0.08, handheld tilt 0.25
 # and roll 0.1, fold slope 0.8, crease slope 0.08-0.35, complete margin 0-0.035: 0.80 of
