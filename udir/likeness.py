@@ -1,0 +1,177 @@
+"""How alike generated crops and real photos' crops look: a few image measures per kind.
+
+Sessions tune `ranges.py` by comparing measures like these between the generator's crops
+and crops cut from real photos (`photos.crops_of_each_kind`, as the training loop's real-
+photo check cuts them). Measured on the 288 px crop, each a median over crops unless said:
+
+- line pitch: distance between text lines (px) in the crop's middle half, after turning
+  it to the angle (within +-15 degrees) at which its ink rows stand out most (a projection
+  profile); `found` is the share of crops where a pitch was clear at all;
+- edge density: share of pixels with a Sobel gradient magnitude above 80;
+- sharpness: variance of the Laplacian, lower quartile (the softest quarter is what hides
+  text lines);
+- ink share: share of pixels darker than their neighbourhood by a margin (text strokes).
+
+    python -m doctrpp.udir.likeness PHOTO_FOLDER [--count 48] [--seed 910000] [--json OUT]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from doctrpp.errors import CliError
+from doctrpp.files import write_bytes_atomically
+from doctrpp.progress import progress
+from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
+from doctrpp.runtime.line_alignment import ink_mask, line_pitch
+
+from .photos import crops_of_each_kind, spread
+from .scene import KINDS
+
+SIZE = 288
+EDGE_THRESHOLD = 80.0
+DESKEW_ANGLES = np.linspace(-15.0, 15.0, 13)  # degrees
+
+
+@dataclass(frozen=True)
+class CropMeasures:
+    line_pitch: float | None  # px at SIZE; None where no periodic rows were found
+    edge_density: float
+    sharpness: float  # variance of the Laplacian
+    ink_share: float
+
+
+def gray_at_size(image: np.ndarray) -> np.ndarray:
+    """The crop in grey at SIZE x SIZE (squashed, as the model's input is)."""
+    gray = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
+    if gray.shape != (SIZE, SIZE):
+        gray = cv2.resize(gray, (SIZE, SIZE), interpolation=cv2.INTER_AREA)
+    return gray
+
+
+def deskewed_row_profile(ink: np.ndarray) -> np.ndarray:
+    """Mean ink per row of `ink` turned to the angle whose row profile varies most."""
+    height, width = ink.shape
+    centre = (width / 2, height / 2)
+    best, best_spread = ink.mean(1), -1.0
+    for angle in DESKEW_ANGLES:
+        turned = cv2.warpAffine(
+            ink, cv2.getRotationMatrix2D(centre, float(angle), 1.0), (width, height)
+        )
+        # Only the inner part: turning brings empty corners in.
+        inner = turned[height // 8 : height - height // 8, width // 8 : width - width // 8]
+        profile = inner.mean(1)
+        if profile.var() > best_spread:
+            best, best_spread = profile, float(profile.var())
+    return best
+
+
+def crop_measures(image: np.ndarray) -> CropMeasures:
+    """The four measures of one crop (BGR or grey, any size; measured at SIZE)."""
+    gray = gray_at_size(image)
+    ink = ink_mask(gray)
+    quarter = SIZE // 4
+    middle = ink[quarter : SIZE - quarter, quarter : SIZE - quarter]
+    as_float = gray.astype(np.float32)
+    gradient = np.hypot(
+        cv2.Sobel(as_float, cv2.CV_32F, 1, 0), cv2.Sobel(as_float, cv2.CV_32F, 0, 1)
+    )
+    return CropMeasures(
+        line_pitch=line_pitch(deskewed_row_profile(middle)),
+        edge_density=float((gradient > EDGE_THRESHOLD).mean()),
+        sharpness=float(cv2.Laplacian(gray, cv2.CV_64F).var()),
+        ink_share=float(ink.mean()),
+    )
+
+
+def summarise(rows: list[CropMeasures]) -> dict[str, float]:
+    """Medians (sharpness: lower quartile) and the share of crops with a line pitch."""
+    if not rows:
+        return {}
+    pitches = [r.line_pitch for r in rows if r.line_pitch is not None]
+    return {
+        "line_pitch": float(np.median(pitches)) if pitches else float("nan"),
+        "pitch_found": len(pitches) / len(rows),
+        "edge_density": float(np.median([r.edge_density for r in rows])),
+        "sharpness_q25": float(np.percentile([r.sharpness for r in rows], 25)),
+        "ink_share": float(np.median([r.ink_share for r in rows])),
+        "crops": float(len(rows)),
+    }
+
+
+def photo_measures(folder: Path, count: int, seed: int = 0) -> dict[str, list[CropMeasures]]:
+    """Measures of one crop of each kind from `count` photos spread over `folder`."""
+    files = sorted(f for f in folder.iterdir() if f.suffix.lower() in IMAGE_SUFFIXES)
+    if not files:
+        raise CliError(f"{folder}: no images")
+    rows: dict[str, list[CropMeasures]] = {kind: [] for kind in KINDS}
+    chosen = spread(files, count)
+    for index, path in enumerate(progress(chosen, len(chosen), "real crops")):
+        for kind, crop in crops_of_each_kind(read_image(path)[:, :, :3], seed, index).items():
+            rows[kind].append(crop_measures(crop))
+    return rows
+
+
+def generated_measures(count: int, seed: int) -> dict[str, list[CropMeasures]]:
+    """Measures of `count` generated crops of each kind (seeds seed, seed + 1, ...)."""
+    from .sample import generate
+
+    rows: dict[str, list[CropMeasures]] = {kind: [] for kind in KINDS}
+    jobs = [(kind, seed + i) for kind in KINDS for i in range(count)]
+    for kind, sample_seed in progress(jobs, len(jobs), "generated crops"):
+        # The map is not measured: a small one keeps generation cheap.
+        sample = generate(sample_seed, kind, size=SIZE, map_size=16)
+        rows[kind].append(crop_measures(sample.image))
+    return rows
+
+
+def comparison_table(real: dict[str, dict], generated: dict[str, dict]) -> str:
+    """Markdown: one row per measure and kind, real beside generated."""
+    lines = ["| measure | kind | real | generated |", "|---|---|---|---|"]
+    for measure in ("line_pitch", "pitch_found", "edge_density", "sharpness_q25", "ink_share"):
+        for kind in KINDS:
+            a, b = real[kind].get(measure, float("nan")), generated[kind].get(measure, float("nan"))
+            digits = 0 if measure == "sharpness_q25" else (1 if measure == "line_pitch" else 3)
+            lines.append(f"| {measure} | {kind} | {a:.{digits}f} | {b:.{digits}f} |")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m doctrpp.udir.likeness",
+        description="Compare the generator's crops with crops cut from real photos "
+        "(line pitch, edge density, sharpness, ink share per kind), as a Markdown table.",
+    )
+    parser.add_argument("photos", type=Path, help="folder of real photos")
+    parser.add_argument(
+        "--count", type=int, default=48, help="photos, and generated crops per kind"
+    )
+    parser.add_argument("--seed", type=int, default=910000, help="first generator seed")
+    parser.add_argument("--json", type=Path, help="also write the summaries here")
+    args = parser.parse_args(argv)
+    try:
+        if not args.photos.is_dir():
+            raise CliError(f"{args.photos}: no such folder")
+        if args.count < 1:
+            raise CliError("--count must be at least 1")
+        real = {k: summarise(v) for k, v in photo_measures(args.photos, args.count).items()}
+        generated = {k: summarise(v) for k, v in generated_measures(args.count, args.seed).items()}
+    except CliError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print(comparison_table(real, generated))
+    if args.json:
+        record = {"real": real, "generated": generated, "count": args.count, "seed": args.seed}
+        write_bytes_atomically(args.json, json.dumps(record, indent=1).encode())
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
