@@ -25,6 +25,13 @@ PAGE_ASPECT = {  # long side / short side
 }
 # Session 8: docunet_dev's pages carry denser, smaller text than ours did (edge density of
 # 288 px crops 0.32 real against 0.21 ours): pitches moved down by about a fifth.
+# Session 34 (`python -m doctrpp.udir.likeness`, 48 docunet_dev photos against 48 crops per
+# kind): line pitch at 288 px 5.0 / 7.0 / 11.0 real against 4.5 / 7.0 / 17.0 ours (full
+# page / partial / no-boundary); edge density 0.32 / 0.32 / 0.35 against 0.22 / 0.15 / 0.25.
+# Text-heavier pages (article 0.44, magazine 0.14, invoice 0.10, form 0.08, slide 0.04),
+# pitches x0.85 (not slides) and no-boundary crops of 0.35-0.8 closed the pitch gap (12.0 px
+# on no-boundary crops) and trained one cycle that ended level on real photos and behind in
+# unmasked MS-SSIM: not kept (docs/training_history.md, "Session 34").
 LINE_PITCH = {  # text line pitch / page long side
     "article": (1 / 95, 1 / 45),
     "magazine": (1 / 95, 1 / 45),
