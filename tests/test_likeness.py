@@ -44,13 +44,15 @@ def test_cli_compares_real_and_generated(tmp_path, document_photo, capsys):
     photos = tmp_path / "photos"
     photos.mkdir()
     cv2.imwrite(str(photos / "a.png"), document_photo)
-    out = tmp_path / "likeness.json"
-    assert main([str(photos), "--count", "1", "--json", str(out)]) == 0
+    out, sheet = tmp_path / "likeness.json", tmp_path / "sheet.png"
+    assert main([str(photos), "--count", "1", "--json", str(out), "--sheet", str(sheet)]) == 0
     table = capsys.readouterr().out
     assert "| line_pitch | none |" in table
     record = json.loads(out.read_text())
     assert set(record["real"]) == set(record["generated"]) == {"complete", "partial", "none"}
     assert record["generated"]["none"]["crops"] == 1
+    # Three kinds, a real row above a generated one, eight 144 px tiles per row.
+    assert cv2.imread(str(sheet)).shape == (6 * 144, 8 * 144, 3)
 
 
 def test_cli_errors(tmp_path, capsys):
@@ -58,3 +60,5 @@ def test_cli_errors(tmp_path, capsys):
     assert "no such folder" in capsys.readouterr().err
     assert main([str(tmp_path)]) == 2
     assert "no images" in capsys.readouterr().err
+    assert main([str(tmp_path), "--sheet", str(tmp_path / "sheet.txt")]) == 2
+    assert "not an image file name" in capsys.readouterr().err

@@ -13,6 +13,7 @@ photo check cuts them). Measured on the 288 px crop, each a median over crops un
 - ink share: share of pixels darker than their neighbourhood by a margin (text strokes).
 
     python -m doctrpp.udir.likeness PHOTO_FOLDER [--count 48] [--seed 910000] [--json OUT]
+        [--sheet OUT.png]
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ import numpy as np
 from doctrpp.errors import CliError
 from doctrpp.files import write_bytes_atomically
 from doctrpp.progress import progress
-from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
+from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image, write_image
 from doctrpp.runtime.line_alignment import ink_mask, line_pitch
 
 from .photos import crops_of_each_kind, spread
@@ -106,30 +107,54 @@ def summarise(rows: list[CropMeasures]) -> dict[str, float]:
     }
 
 
-def photo_measures(folder: Path, count: int, seed: int = 0) -> dict[str, list[CropMeasures]]:
-    """Measures of one crop of each kind from `count` photos spread over `folder`."""
+def photo_crops(folder: Path, count: int, seed: int = 0) -> dict[str, list[np.ndarray]]:
+    """One crop of each kind (BGR, SIZE x SIZE) from `count` photos spread over `folder`."""
     files = sorted(f for f in folder.iterdir() if f.suffix.lower() in IMAGE_SUFFIXES)
     if not files:
         raise CliError(f"{folder}: no images")
-    rows: dict[str, list[CropMeasures]] = {kind: [] for kind in KINDS}
+    crops: dict[str, list[np.ndarray]] = {kind: [] for kind in KINDS}
     chosen = spread(files, count)
     for index, path in enumerate(progress(chosen, len(chosen), "real crops")):
         for kind, crop in crops_of_each_kind(read_image(path)[:, :, :3], seed, index).items():
-            rows[kind].append(crop_measures(crop))
-    return rows
+            crops[kind].append(cv2.resize(crop, (SIZE, SIZE), interpolation=cv2.INTER_AREA))
+    return crops
 
 
-def generated_measures(count: int, seed: int) -> dict[str, list[CropMeasures]]:
-    """Measures of `count` generated crops of each kind (seeds seed, seed + 1, ...)."""
+def generated_crops(count: int, seed: int) -> dict[str, list[np.ndarray]]:
+    """`count` generated crops of each kind (seeds seed, seed + 1, ...)."""
     from .sample import generate
 
-    rows: dict[str, list[CropMeasures]] = {kind: [] for kind in KINDS}
+    crops: dict[str, list[np.ndarray]] = {kind: [] for kind in KINDS}
     jobs = [(kind, seed + i) for kind in KINDS for i in range(count)]
     for kind, sample_seed in progress(jobs, len(jobs), "generated crops"):
-        # The map is not measured: a small one keeps generation cheap.
-        sample = generate(sample_seed, kind, size=SIZE, map_size=16)
-        rows[kind].append(crop_measures(sample.image))
-    return rows
+        # The map is not looked at: a small one keeps generation cheap.
+        crops[kind].append(generate(sample_seed, kind, size=SIZE, map_size=16).image)
+    return crops
+
+
+def summaries(crops: dict[str, list[np.ndarray]]) -> dict[str, dict[str, float]]:
+    """`summarise` of each kind's crops."""
+    return {kind: summarise([crop_measures(c) for c in images]) for kind, images in crops.items()}
+
+
+def contact_sheet(
+    real: dict[str, list[np.ndarray]],
+    generated: dict[str, list[np.ndarray]],
+    per_row: int = 8,
+    tile: int = 144,
+) -> np.ndarray:
+    """Per kind, a row of real crops above a row of generated ones, each row labelled."""
+    rows = []
+    for kind in KINDS:
+        for source, crops in (("real", real[kind]), ("generated", generated[kind])):
+            tiles = [cv2.resize(c, (tile, tile), interpolation=cv2.INTER_AREA) for c in crops]
+            tiles = (tiles + [np.zeros((tile, tile, 3), np.uint8)] * per_row)[:per_row]
+            row = np.concatenate(tiles, 1)
+            cv2.putText(
+                row, f"{kind} {source}", (4, 14), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (0, 0, 255), 1
+            )
+            rows.append(row)
+    return np.concatenate(rows, 0)
 
 
 def comparison_table(real: dict[str, dict], generated: dict[str, dict]) -> str:
@@ -155,20 +180,34 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--seed", type=int, default=910000, help="first generator seed")
     parser.add_argument("--json", type=Path, help="also write the summaries here")
+    parser.add_argument(
+        "--sheet", type=Path, help="also write a contact sheet (8 crops per kind, real above ours)"
+    )
     args = parser.parse_args(argv)
     try:
         if not args.photos.is_dir():
             raise CliError(f"{args.photos}: no such folder")
         if args.count < 1:
             raise CliError("--count must be at least 1")
-        real = {k: summarise(v) for k, v in photo_measures(args.photos, args.count).items()}
-        generated = {k: summarise(v) for k, v in generated_measures(args.count, args.seed).items()}
+        if args.sheet and args.sheet.suffix.lower() not in IMAGE_SUFFIXES:
+            raise CliError(f"--sheet {args.sheet}: not an image file name (.png, .jpg, ...)")
+        real_crops = photo_crops(args.photos, args.count)
+        generated = generated_crops(args.count, args.seed)
     except CliError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    print(comparison_table(real, generated))
+    real, generated_summary = summaries(real_crops), summaries(generated)
+    print(comparison_table(real, generated_summary))
+    if args.sheet:
+        write_image(args.sheet, contact_sheet(real_crops, generated))
+        print(f"wrote {args.sheet}")
     if args.json:
-        record = {"real": real, "generated": generated, "count": args.count, "seed": args.seed}
+        record = {
+            "real": real,
+            "generated": generated_summary,
+            "count": args.count,
+            "seed": args.seed,
+        }
         write_bytes_atomically(args.json, json.dumps(record, indent=1).encode())
     return 0
 
