@@ -22,9 +22,8 @@ from doctrpp.benchmarks.reference_free import (
     rectification_scores,
     summarise,
 )
-from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
 from doctrpp.runtime.processing import applied_map, model_input, rectify_with_map
-from doctrpp.udir.photos import crops_of_each_kind, spread
+from doctrpp.udir.photos import crops_from_folder
 
 from .validate import batch_maps, identity_map, predict_maps, score_maps
 
@@ -39,13 +38,9 @@ class RealItem:
 
 def real_photo_set(folder: Path, photos: int = 32, seed: int = 0) -> list[RealItem]:
     """`photos` photos spread over the folder, each as a complete, partial and none crop."""
-    files = sorted(f for f in Path(folder).iterdir() if f.suffix.lower() in IMAGE_SUFFIXES)
-    if not files:
-        raise FileNotFoundError(f"{folder}: no images")
     items = []
-    for index, path in enumerate(spread(files, photos)):
-        photo = read_image(path)[:, :, :3]
-        for kind, crop in crops_of_each_kind(photo, seed, index).items():
+    for path, crops in crops_from_folder(folder, photos, seed):
+        for kind, crop in crops.items():
             crop = cv2.resize(crop, (SCORE_SIZE, SCORE_SIZE), cv2.INTER_AREA)
             items.append(RealItem(path.stem, kind, crop, line_scores(crop)))
     return items

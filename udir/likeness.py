@@ -30,10 +30,10 @@ import numpy as np
 from doctrpp.errors import CliError
 from doctrpp.files import write_bytes_atomically
 from doctrpp.progress import progress
-from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image, write_image
+from doctrpp.runtime.imageio import IMAGE_SUFFIXES, write_image
 from doctrpp.runtime.line_alignment import ink_mask, line_pitch
 
-from .photos import crops_of_each_kind, spread
+from .photos import crops_from_folder
 from .scene import KINDS
 
 SIZE = 288
@@ -109,14 +109,15 @@ def summarise(rows: list[CropMeasures]) -> dict[str, float]:
 
 def photo_crops(folder: Path, count: int, seed: int = 0) -> dict[str, list[np.ndarray]]:
     """One crop of each kind (BGR, SIZE x SIZE) from `count` photos spread over `folder`."""
-    files = sorted(f for f in folder.iterdir() if f.suffix.lower() in IMAGE_SUFFIXES)
-    if not files:
-        raise CliError(f"{folder}: no images")
     crops: dict[str, list[np.ndarray]] = {kind: [] for kind in KINDS}
-    chosen = spread(files, count)
-    for index, path in enumerate(progress(chosen, len(chosen), "real crops")):
-        for kind, crop in crops_of_each_kind(read_image(path)[:, :, :3], seed, index).items():
-            crops[kind].append(cv2.resize(crop, (SIZE, SIZE), interpolation=cv2.INTER_AREA))
+    try:
+        for _, photo_crops_by_kind in progress(
+            crops_from_folder(folder, count, seed), count, "real crops"
+        ):
+            for kind, crop in photo_crops_by_kind.items():
+                crops[kind].append(cv2.resize(crop, (SIZE, SIZE), interpolation=cv2.INTER_AREA))
+    except FileNotFoundError as exc:
+        raise CliError(str(exc)) from exc
     return crops
 
 

@@ -7,6 +7,9 @@ a window off one side, 'none' takes a window from the middle of the frame.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from pathlib import Path
+
 import numpy as np
 
 from .scene import KINDS
@@ -54,3 +57,17 @@ def crops_of_each_kind(photo: np.ndarray, seed: int, index: int) -> dict[str, np
         x0, y0, x1, y1 = photo_crop_box(rng, photo.shape[0], photo.shape[1], kind)
         crops[kind] = photo[y0:y1, x0:x1]
     return crops
+
+
+def crops_from_folder(
+    folder: Path, photos: int, seed: int = 0
+) -> Iterator[tuple[Path, dict[str, np.ndarray]]]:
+    """For `photos` photos spread over `folder`, each path with one crop of each kind
+    (`crops_of_each_kind`; BGR, at the photo's resolution). FileNotFoundError: no images."""
+    from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
+
+    files = sorted(f for f in Path(folder).iterdir() if f.suffix.lower() in IMAGE_SUFFIXES)
+    if not files:
+        raise FileNotFoundError(f"{folder}: no images")
+    for index, path in enumerate(spread(files, photos)):
+        yield path, crops_of_each_kind(read_image(path)[:, :, :3], seed, index)
