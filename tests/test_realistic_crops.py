@@ -107,3 +107,20 @@ def test_some_pages_are_printed_light_on_dark():
     assert float(np.quantile(page, 0.995)) > background + 60  # ... with light lettering
     normal = page_for(chosen[0] + 1).mean(-1)
     assert float(np.median(normal)) > 150  # its neighbour is printed as usual
+
+
+def test_pictures_are_muted_and_have_sharp_objects():
+    """Pictures on pages (session 35): muted colours as in real pages' photos, not
+    saturated rainbow fields; objects with edges; deterministic per seed."""
+    import cv2
+
+    from doctrpp.udir.paper import photo
+
+    pictures = [photo(np.random.default_rng(seed), 120, 160) for seed in range(24)]
+    assert all(p.shape == (120, 160, 3) and p.dtype == np.uint8 for p in pictures)
+    assert np.array_equal(photo(np.random.default_rng(3), 120, 160), pictures[3])
+    saturation = [np.median(cv2.cvtColor(p, cv2.COLOR_BGR2HSV)[..., 1]) for p in pictures]
+    print(f"median HSV saturation of pictures: {np.median(saturation):.0f} / 255")
+    assert np.median(saturation) < 0.45 * 255
+    edges = [np.mean(cv2.Canny(cv2.GaussianBlur(p, (5, 5), 0), 40, 120) > 0) for p in pictures]
+    assert np.mean([e > 0.002 for e in edges]) > 0.75

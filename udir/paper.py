@@ -62,21 +62,87 @@ def reversed_print(rng: np.random.Generator, page: np.ndarray) -> np.ndarray:
     return np.clip(out + 0.5, 0, 255).astype(np.uint8)
 
 
-def photo(rng: np.random.Generator, h: int, w: int) -> np.ndarray:
-    """A photo-like picture: smooth colour regions, objects, texture (BGR uint8)."""
-    h, w = max(h, 1), max(w, 1)
-    field = rng.uniform(0, 255, (int(rng.integers(2, 5)), int(rng.integers(2, 5)), 3))
-    image = cv2.resize(field.astype(np.float32), (w, h), interpolation=cv2.INTER_CUBIC)
-    if rng.random() < 0.5:  # horizon: sky over ground
-        cut = int(h * rng.uniform(0.3, 0.7))
-        image[:cut] = image[:cut] * 0.5 + rng.uniform(120, 255, 3).astype(np.float32) * 0.5
-    for _ in range(int(rng.integers(1, 7))):
-        centre = (int(rng.integers(0, w)), int(rng.integers(0, h)))
-        axes = (int(rng.integers(3, w // 2 + 4)), int(rng.integers(3, h // 2 + 4)))
-        colour = [float(c) for c in rng.uniform(0, 255, 3)]
+def _muted_colour(rng: np.random.Generator, accent: bool = False) -> np.ndarray:
+    """A BGR colour (float 0-255): muted, or saturated for an accent."""
+    saturation = rng.uniform(0.6, 0.95) if accent else rng.uniform(*ranges.PHOTO_SATURATION)
+    hsv = np.array(
+        [[[rng.uniform(0, 180), saturation * 255, rng.uniform(*ranges.PHOTO_VALUE) * 255]]]
+    )
+    return cv2.cvtColor(hsv.astype(np.uint8), cv2.COLOR_HSV2BGR)[0, 0].astype(np.float32)
+
+
+def _lit(rng: np.random.Generator, h: int, w: int) -> np.ndarray:
+    """A brightness factor (h, w, 1) that changes linearly across the picture."""
+    angle = rng.uniform(0, 2 * np.pi)
+    ys, xs = np.mgrid[0:h, 0:w].astype(np.float32)
+    ramp = (np.cos(angle) * xs / w + np.sin(angle) * ys / h).astype(np.float32)
+    ramp -= ramp.mean()
+    return (1 + rng.uniform(*ranges.PHOTO_LIGHT) * ramp)[..., None]
+
+
+def _object_mask(rng: np.random.Generator, h: int, w: int) -> np.ndarray:
+    """A filled ellipse, box or polygon (float mask 0-1, antialiased)."""
+    mask = np.zeros((h, w), np.uint8)
+    cx, cy = int(rng.integers(0, w)), int(rng.integers(h // 4, h))
+    size = np.exp(rng.uniform(np.log(0.03), np.log(0.35)))  # many small, a few large
+    ax = max(2, int(w * size * rng.uniform(0.5, 1.5)))
+    ay = max(2, int(h * size * rng.uniform(0.8, 2.5)))
+    shape = rng.random()
+    if shape < 0.4:
         cv2.ellipse(
-            image, centre, axes, float(rng.uniform(0, 180)), 0, 360, colour, -1, cv2.LINE_AA
+            mask, (cx, cy), (ax, ay), float(rng.uniform(-20, 20)), 0, 360, 255, -1, cv2.LINE_AA
         )
-    texture = rng.standard_normal((h, w, 1)).astype(np.float32) * rng.uniform(2, 14)
-    image = cv2.GaussianBlur(image, (0, 0), max(1.0, min(h, w) / 60)) + texture
-    return np.clip(image, 0, 255).astype(np.uint8)
+    elif shape < 0.8:
+        cv2.rectangle(mask, (cx - ax, cy - ay), (cx + ax, cy + ay), 255, -1, cv2.LINE_AA)
+    else:
+        angles = np.sort(rng.uniform(0, 2 * np.pi, int(rng.integers(3, 7))))
+        points = np.stack([cx + ax * np.cos(angles), cy + ay * np.sin(angles)], 1)
+        cv2.fillPoly(mask, [points.astype(np.int32)], 255, cv2.LINE_AA)
+    return mask.astype(np.float32)[..., None] / 255.0
+
+
+def _label(rng: np.random.Generator, surface: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """`surface` with a light band across the object's middle carrying a few dark strokes."""
+    ys, xs = np.nonzero(mask[..., 0] > 0.5)
+    if len(ys) < 16:
+        return surface
+    top, bottom, left, right = ys.min(), ys.max(), xs.min(), xs.max()
+    band_top = int(top + (bottom - top) * rng.uniform(0.2, 0.5))
+    band_bottom = int(band_top + (bottom - top) * rng.uniform(0.15, 0.4))
+    labelled = surface.copy()
+    labelled[band_top:band_bottom, left:right] = _muted_colour(rng) * 0.3 + 170
+    stroke = max(1, (band_bottom - band_top) // 6)
+    ink = _muted_colour(rng, accent=rng.random() < 0.5) * 0.4
+    for y in range(band_top + stroke, band_bottom - stroke, 2 * stroke + 1):
+        end = int(left + (right - left) * rng.uniform(0.3, 0.9))
+        labelled[y : y + stroke, left + stroke : end] = ink
+    return labelled
+
+
+def photo(rng: np.random.Generator, h: int, w: int) -> np.ndarray:
+    """A photo-like picture: a lit backdrop (maybe over a floor or table), a few shaded
+    objects with soft shadows, grain; muted colours, sometimes black and white (BGR uint8)."""
+    h, w = max(h, 1), max(w, 1)
+    image = np.broadcast_to(_muted_colour(rng), (h, w, 3)) * _lit(rng, h, w)
+    if rng.random() < ranges.PHOTO_GROUND_SHARE:
+        cut = int(h * rng.uniform(0.45, 0.8))
+        image[cut:] = _muted_colour(rng) * _lit(rng, h - cut, w)
+    shadow_shift = rng.uniform(-0.03, 0.03, 2) * (w, h)
+    for _ in range(int(rng.integers(*ranges.PHOTO_OBJECTS))):
+        mask = _object_mask(rng, h, w)
+        shadow = cv2.GaussianBlur(
+            np.roll(mask[..., 0], (int(shadow_shift[1]), int(shadow_shift[0])), (0, 1)),
+            (0, 0),
+            max(1.0, min(h, w) / 40),
+        )[..., None]
+        image = image * (1 - rng.uniform(0.2, 0.5) * shadow)
+        accent = rng.random() < ranges.PHOTO_ACCENT_SHARE
+        surface = _muted_colour(rng, accent) * _lit(rng, h, w)
+        if rng.random() < ranges.PHOTO_LABEL_SHARE:  # a label or print on the object
+            surface = _label(rng, surface, mask)
+        image = image * (1 - mask) + surface * mask
+    image = cv2.GaussianBlur(image.astype(np.float32), (0, 0), max(0.5, min(h, w) / 400))
+    if rng.random() < ranges.PHOTO_GREY_SHARE:
+        image = np.repeat(image.mean(-1, keepdims=True), 3, -1)
+    grain = rng.standard_normal((h, w, 1)).astype(np.float32) * rng.uniform(*ranges.PHOTO_GRAIN)
+    return np.clip(image + grain, 0, 255).astype(np.uint8)

@@ -125,6 +125,19 @@ REVERSED_PRINT_SHARE = 0.05
 REVERSED_FLOOD = (8, 110)  # grey level of the flood colour
 REVERSED_LETTERS = (190, 248)  # grey level of the lettering (the paper left unprinted)
 
+# Pictures on pages (paper.photo). Session 35: the likeness sheet showed our pictures as
+# saturated rainbow fields under heavy grain; docunet_dev's are products, people and rooms
+# in muted colours on plain or lit backdrops, with sharp object edges.
+PHOTO_SATURATION = (0.05, 0.55)  # HSV saturation of backdrop and objects
+PHOTO_VALUE = (0.3, 0.95)  # HSV value (brightness)
+PHOTO_ACCENT_SHARE = 0.25  # objects in one saturated colour (packaging, clothes)
+PHOTO_OBJECTS = (2, 9)  # upper bound exclusive
+PHOTO_LABEL_SHARE = 0.35  # objects carrying a label band with print on it
+PHOTO_LIGHT = (0.1, 0.5)  # brightness change across the backdrop and each object
+PHOTO_GROUND_SHARE = 0.5  # a floor, table or ground under the backdrop
+PHOTO_GRAIN = (0.5, 5.0)  # grey levels of sensor / halftone grain
+PHOTO_GREY_SHARE = 0.2  # black-and-white pictures (newsprint)
+
 # -- framing (sample.py) ---------------------------------------------------------------------
 # Session 8: docunet_dev's pages fill their frames (background on one or two sides, a few
 # per cent); ours sat in twice as much background (a native-size sheet side by side).
