@@ -62,3 +62,17 @@ def test_cli_errors(tmp_path, capsys):
     assert "no images" in capsys.readouterr().err
     assert main([str(tmp_path), "--sheet", str(tmp_path / "sheet.txt")]) == 2
     assert "not an image file name" in capsys.readouterr().err
+
+
+def test_coherence_sees_wavy_lines():
+    """Straight lines (turned or not) line up across the width; waves do not."""
+    straight = crop_measures(ruled_page(12, 0.0)).coherence
+    turned = crop_measures(ruled_page(12, 9.0)).coherence
+    ys, xs = np.mgrid[0:SIZE, 0:SIZE].astype(np.float32)
+    wave = 8.0 * np.sin(xs / SIZE * 3 * np.pi)
+    wavy_page = cv2.remap(ruled_page(12, 0.0), xs, ys + wave, cv2.INTER_LINEAR)
+    wavy = crop_measures(wavy_page).coherence
+    print(f"coherence: straight {straight:.2f}, turned {turned:.2f}, wavy {wavy:.2f}")
+    assert straight > 0.9 and turned > 0.7  # 9 degrees, read at the 10 degree step
+    assert wavy < 0.6 * straight
+    assert crop_measures(np.full((100, 80, 3), 230, np.uint8)).coherence == 0.0

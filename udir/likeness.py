@@ -10,7 +10,10 @@ photo check cuts them). Measured on the 288 px crop, each a median over crops un
 - edge density: share of pixels with a Sobel gradient magnitude above 80;
 - sharpness: variance of the Laplacian, lower quartile (the softest quarter is what hides
   text lines);
-- ink share: share of pixels darker than their neighbourhood by a margin (text strokes).
+- ink share: share of pixels darker than their neighbourhood by a margin (text strokes);
+- coherence: `benchmarks.reference_free.line_coherence` of the crop turned to that angle
+  (its middle three quarters): how well text lines line up across the width, so lower
+  means curlier or wavier lines (or staggered columns); crops without lines are left out.
 
     python -m doctrpp.udir.likeness PHOTO_FOLDER [--count 48] [--seed 910000] [--json OUT]
         [--sheet OUT.png]
@@ -27,6 +30,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from doctrpp.benchmarks.reference_free import line_coherence
 from doctrpp.errors import CliError
 from doctrpp.files import write_bytes_atomically
 from doctrpp.progress import progress
@@ -47,6 +51,7 @@ class CropMeasures:
     edge_density: float
     sharpness: float  # variance of the Laplacian
     ink_share: float
+    coherence: float  # deskewed full-width / band row-profile contrast; 0 = no text lines
 
 
 def gray_at_size(image: np.ndarray) -> np.ndarray:
@@ -57,21 +62,19 @@ def gray_at_size(image: np.ndarray) -> np.ndarray:
     return gray
 
 
-def deskewed_row_profile(ink: np.ndarray) -> np.ndarray:
-    """Mean ink per row of `ink` turned to the angle whose row profile varies most."""
-    height, width = ink.shape
-    centre = (width / 2, height / 2)
-    best, best_spread = ink.mean(1), -1.0
-    for angle in DESKEW_ANGLES:
-        turned = cv2.warpAffine(
-            ink, cv2.getRotationMatrix2D(centre, float(angle), 1.0), (width, height)
-        )
-        # Only the inner part: turning brings empty corners in.
-        inner = turned[height // 8 : height - height // 8, width // 8 : width - width // 8]
-        profile = inner.mean(1)
-        if profile.var() > best_spread:
-            best, best_spread = profile, float(profile.var())
-    return best
+def _turned_inner(image: np.ndarray, angle: float) -> np.ndarray:
+    """`image` turned by `angle` degrees about its centre, without its outer eighths
+    (turning brings empty corners in)."""
+    height, width = image.shape[:2]
+    turn = cv2.getRotationMatrix2D((width / 2, height / 2), float(angle), 1.0)
+    turned = cv2.warpAffine(image, turn, (width, height), borderMode=cv2.BORDER_REPLICATE)
+    return turned[height // 8 : height - height // 8, width // 8 : width - width // 8]
+
+
+def deskew_angle(ink: np.ndarray) -> float:
+    """The angle in DESKEW_ANGLES at which the rows of `ink` vary most."""
+    spreads = [_turned_inner(ink, angle).mean(1).var() for angle in DESKEW_ANGLES]
+    return float(DESKEW_ANGLES[int(np.argmax(spreads))])
 
 
 def crop_measures(image: np.ndarray) -> CropMeasures:
@@ -84,11 +87,13 @@ def crop_measures(image: np.ndarray) -> CropMeasures:
     gradient = np.hypot(
         cv2.Sobel(as_float, cv2.CV_32F, 1, 0), cv2.Sobel(as_float, cv2.CV_32F, 0, 1)
     )
+    angle = deskew_angle(middle)
     return CropMeasures(
-        line_pitch=line_pitch(deskewed_row_profile(middle)),
+        line_pitch=line_pitch(_turned_inner(middle, angle).mean(1)),
         edge_density=float((gradient > EDGE_THRESHOLD).mean()),
         sharpness=float(cv2.Laplacian(gray, cv2.CV_64F).var()),
         ink_share=float(ink.mean()),
+        coherence=line_coherence(_turned_inner(gray, angle)),
     )
 
 
@@ -103,6 +108,7 @@ def summarise(rows: list[CropMeasures]) -> dict[str, float]:
         "edge_density": float(np.median([r.edge_density for r in rows])),
         "sharpness_q25": float(np.percentile([r.sharpness for r in rows], 25)),
         "ink_share": float(np.median([r.ink_share for r in rows])),
+        "coherence": float(np.median([r.coherence for r in rows if r.coherence > 0] or [0.0])),
         "crops": float(len(rows)),
     }
 
@@ -161,7 +167,15 @@ def contact_sheet(
 def comparison_table(real: dict[str, dict], generated: dict[str, dict]) -> str:
     """Markdown: one row per measure and kind, real beside generated."""
     lines = ["| measure | kind | real | generated |", "|---|---|---|---|"]
-    for measure in ("line_pitch", "pitch_found", "edge_density", "sharpness_q25", "ink_share"):
+    measures = (
+        "line_pitch",
+        "pitch_found",
+        "edge_density",
+        "sharpness_q25",
+        "ink_share",
+        "coherence",
+    )
+    for measure in measures:
         for kind in KINDS:
             a, b = real[kind].get(measure, float("nan")), generated[kind].get(measure, float("nan"))
             digits = 0 if measure == "sharpness_q25" else (1 if measure == "line_pitch" else 3)
@@ -173,7 +187,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m doctrpp.udir.likeness",
         description="Compare the generator's crops with crops cut from real photos "
-        "(line pitch, edge density, sharpness, ink share per kind), as a Markdown table.",
+        "(line pitch, edge density, sharpness, ink share, line coherence per kind), as a "
+        "Markdown table.",
     )
     parser.add_argument("photos", type=Path, help="folder of real photos")
     parser.add_argument(
