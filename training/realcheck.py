@@ -23,7 +23,7 @@ from doctrpp.benchmarks.reference_free import (
     summarise,
 )
 from doctrpp.runtime.processing import applied_map, model_input, rectify_with_map
-from doctrpp.udir.photos import crops_from_folder
+from doctrpp.udir.photos import chosen_photos, crops_of_photos
 
 from .validate import batch_maps, identity_map, predict_maps, score_maps
 
@@ -39,7 +39,7 @@ class RealItem:
 def real_photo_set(folder: Path, photos: int = 32, seed: int = 0) -> list[RealItem]:
     """`photos` photos spread over the folder, each as a complete, partial and none crop."""
     items = []
-    for path, crops in crops_from_folder(folder, photos, seed):
+    for path, crops in crops_of_photos(chosen_photos(folder, photos), seed):
         for kind, crop in crops.items():
             crop = cv2.resize(crop, (SCORE_SIZE, SCORE_SIZE), cv2.INTER_AREA)
             items.append(RealItem(path.stem, kind, crop, line_scores(crop)))

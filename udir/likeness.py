@@ -37,7 +37,7 @@ from doctrpp.progress import progress
 from doctrpp.runtime.imageio import IMAGE_SUFFIXES, write_image
 from doctrpp.runtime.line_alignment import ink_mask, line_pitch
 
-from .photos import crops_from_folder
+from .photos import chosen_photos, crops_of_photos
 from .scene import KINDS
 
 SIZE = 288
@@ -117,13 +117,12 @@ def photo_crops(folder: Path, count: int, seed: int = 0) -> dict[str, list[np.nd
     """One crop of each kind (BGR, SIZE x SIZE) from `count` photos spread over `folder`."""
     crops: dict[str, list[np.ndarray]] = {kind: [] for kind in KINDS}
     try:
-        for _, photo_crops_by_kind in progress(
-            crops_from_folder(folder, count, seed), count, "real crops"
-        ):
-            for kind, crop in photo_crops_by_kind.items():
-                crops[kind].append(cv2.resize(crop, (SIZE, SIZE), interpolation=cv2.INTER_AREA))
+        paths = chosen_photos(folder, count)
     except FileNotFoundError as exc:
         raise CliError(str(exc)) from exc
+    for _, photo_crops_by_kind in progress(crops_of_photos(paths, seed), len(paths), "real crops"):
+        for kind, crop in photo_crops_by_kind.items():
+            crops[kind].append(cv2.resize(crop, (SIZE, SIZE), interpolation=cv2.INTER_AREA))
     return crops
 
 

@@ -59,15 +59,23 @@ def crops_of_each_kind(photo: np.ndarray, seed: int, index: int) -> dict[str, np
     return crops
 
 
-def crops_from_folder(
-    folder: Path, photos: int, seed: int = 0
-) -> Iterator[tuple[Path, dict[str, np.ndarray]]]:
-    """For `photos` photos spread over `folder`, each path with one crop of each kind
-    (`crops_of_each_kind`; BGR, at the photo's resolution). FileNotFoundError: no images."""
-    from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
+def chosen_photos(folder: Path, photos: int) -> list[Path]:
+    """`photos` image files spread evenly over `folder` (sorted by name; fewer if it holds
+    fewer). FileNotFoundError: no images."""
+    from doctrpp.runtime.imageio import IMAGE_SUFFIXES
 
     files = sorted(f for f in Path(folder).iterdir() if f.suffix.lower() in IMAGE_SUFFIXES)
     if not files:
         raise FileNotFoundError(f"{folder}: no images")
-    for index, path in enumerate(spread(files, photos)):
+    return spread(files, photos)
+
+
+def crops_of_photos(
+    paths: list[Path], seed: int = 0
+) -> Iterator[tuple[Path, dict[str, np.ndarray]]]:
+    """Each path with one crop of each kind of its photo (`crops_of_each_kind`, the photo's
+    place in `paths` as its index; BGR, at the photo's resolution)."""
+    from doctrpp.runtime.imageio import read_image
+
+    for index, path in enumerate(paths):
         yield path, crops_of_each_kind(read_image(path)[:, :, :3], seed, index)
