@@ -47,13 +47,11 @@ REAL_KINDS = ("real complete", "real partial", "real none")
 def photo_probes(folder: Path | None, limit: int = 12) -> list[Probe]:
     """Crops of the three kinds cut from real photos (the user's `folder`, at most `limit`
     spread over it; else the two document photos scikit-image ships, if installed)."""
-    from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
+    from doctrpp.runtime.imageio import image_files, read_image
     from doctrpp.udir.photos import crops_of_each_kind, spread
 
     if folder is not None:
-        paths = spread(
-            sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES), limit
-        )
+        paths = spread(image_files(folder), limit)
     else:
         try:
             import skimage

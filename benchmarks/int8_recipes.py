@@ -26,7 +26,7 @@ import numpy as np
 
 from doctrpp import contract
 from doctrpp.files import write_bytes_atomically
-from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
+from doctrpp.runtime.imageio import image_files, read_image
 from doctrpp.runtime.processing import model_input
 from doctrpp.udir.photos import photo_crop_box
 from doctrpp.udir.scene import KINDS
@@ -99,7 +99,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--runs", type=int, default=30, help="timed runs per model and threads")
     args = parser.parse_args(argv)
 
-    photos = sorted(p for p in args.photos.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    photos = image_files(args.photos)
     calib_photos, eval_photos = photos[0::2], photos[1::2]
     model = load_model(args.checkpoint).eval()
     held_out = {

@@ -76,7 +76,7 @@ def compare(rows: list[dict]) -> dict[str, dict[str, float]]:
 
 def main(argv: list[str] | None = None) -> int:
     from doctrpp.runtime import Rectifier, read_image
-    from doctrpp.runtime.imageio import IMAGE_SUFFIXES
+    from doctrpp.runtime.imageio import image_files
     from doctrpp.runtime.models import shipped_model
 
     parser = argparse.ArgumentParser(
@@ -89,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if shutil.which("tesseract") is None:
         parser.error("needs the tesseract command (Debian: apt-get install tesseract-ocr)")
-    files = sorted(f for f in args.photos.iterdir() if f.suffix.lower() in IMAGE_SUFFIXES)
+    files = image_files(args.photos)
     files = files[: args.count or None]
     if not files:
         parser.error(f"{args.photos}: no images")

@@ -43,9 +43,9 @@ def big_photo(source: np.ndarray, megapixels: float) -> np.ndarray:
 
 def source_photos(folder: Path | None, count: int) -> list[np.ndarray]:
     if folder:
-        from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
+        from doctrpp.runtime.imageio import image_files, read_image
 
-        files = sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+        files = image_files(folder)
         return [read_image(p)[:, :, :3] for p in files[:count]]
     from doctrpp.udir.sample import generate
 

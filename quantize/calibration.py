@@ -11,7 +11,7 @@ import numpy as np
 
 from doctrpp import contract
 from doctrpp.progress import progress
-from doctrpp.runtime.imageio import IMAGE_SUFFIXES, read_image
+from doctrpp.runtime.imageio import image_files, read_image
 from doctrpp.runtime.processing import model_input
 
 CALIBRATION_SEED_OFFSET = 2_000_000_000  # away from training and validation seeds
@@ -31,7 +31,7 @@ def generated_inputs(
 
 def folder_inputs(folder: str | Path) -> list[np.ndarray]:
     """Model inputs from every image in `folder` (e.g. from `doctrpp crops --from-photos`)."""
-    paths = sorted(p for p in Path(folder).iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    paths = image_files(folder)
     paths = [p for p in paths if not p.stem.endswith("_flat")]
     if not paths:
         raise ValueError(f"{folder}: no calibration images")

@@ -14,6 +14,11 @@ IMAGE_SUFFIXES = frozenset(
 )
 
 
+def image_files(folder: str | Path) -> list[Path]:
+    """The image files in `folder` (by suffix, not recursive), sorted by name."""
+    return sorted(p for p in Path(folder).iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+
+
 class ImageError(ValueError):
     """An input image that cannot be used; the message is one line naming the file."""
 

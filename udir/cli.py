@@ -14,7 +14,7 @@ import numpy as np
 from doctrpp.errors import CliError
 from doctrpp.files import save_npy_atomically, write_bytes_atomically
 from doctrpp.progress import progress
-from doctrpp.runtime.imageio import IMAGE_SUFFIXES, ImageError, read_image, write_image
+from doctrpp.runtime.imageio import ImageError, image_files, read_image, write_image
 
 from .scene import KINDS
 
@@ -78,7 +78,7 @@ def _photo_jobs(args) -> list[tuple[Path, int, Path, str, int]]:
     folder = args.from_photos
     if not folder.is_dir():
         raise CliError(f"--from-photos {folder}: no such folder")
-    photos = sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    photos = image_files(folder)
     if not photos:
         raise CliError(f"--from-photos {folder}: no images")
     from .sample import kind_for_index

@@ -62,9 +62,9 @@ def crops_of_each_kind(photo: np.ndarray, seed: int, index: int) -> dict[str, np
 def chosen_photos(folder: Path, photos: int) -> list[Path]:
     """`photos` image files spread evenly over `folder` (sorted by name; fewer if it holds
     fewer). FileNotFoundError: no images."""
-    from doctrpp.runtime.imageio import IMAGE_SUFFIXES
+    from doctrpp.runtime.imageio import image_files
 
-    files = sorted(f for f in Path(folder).iterdir() if f.suffix.lower() in IMAGE_SUFFIXES)
+    files = image_files(folder)
     if not files:
         raise FileNotFoundError(f"{folder}: no images")
     return spread(files, photos)
