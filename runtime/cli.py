@@ -13,7 +13,7 @@ from doctrpp.errors import CliError
 from doctrpp.progress import progress
 
 from .backends import ModelError
-from .imageio import IMAGE_SUFFIXES, ImageError, has_alpha, read_image, write_image
+from .imageio import IMAGE_SUFFIXES, ImageError, has_alpha, image_files, read_image, write_image
 from .processing import MAP_SMOOTHING_SIGMA
 
 
@@ -102,9 +102,7 @@ def collect_inputs(inputs: list[Path]) -> list[Path]:
     files: list[Path] = []
     for item in inputs:
         if item.is_dir():
-            found = sorted(
-                p for p in item.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES
-            )
+            found = image_files(item)
             if not found:
                 raise CliError(f"{item}: folder holds no images")
             files.extend(found)

@@ -15,8 +15,11 @@ IMAGE_SUFFIXES = frozenset(
 
 
 def image_files(folder: str | Path) -> list[Path]:
-    """The image files in `folder` (by suffix, not recursive), sorted by name."""
-    return sorted(p for p in Path(folder).iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    """The image files in `folder` (files with an image suffix, not recursive), sorted by
+    name."""
+    return sorted(
+        p for p in Path(folder).iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES
+    )
 
 
 class ImageError(ValueError):

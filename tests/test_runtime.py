@@ -229,3 +229,12 @@ def test_flip_average_keeps_a_mirror_consistent_answer(report_difference):
     other = smooth_map(seed=1)
     expected = (backward_map + other) / 2
     assert np.abs(flip_averaged_map(backward_map, unmirror_map(other)) - expected).max() < 1e-6
+
+
+def test_image_files_lists_image_files_sorted(tmp_path):
+    from doctrpp.runtime.imageio import image_files
+
+    for name in ("b.PNG", "a.jpg", "notes.txt"):
+        (tmp_path / name).write_bytes(b"x")
+    (tmp_path / "folder.png").mkdir()  # a folder named like an image is not one
+    assert [p.name for p in image_files(tmp_path)] == ["a.jpg", "b.PNG"]
