@@ -314,7 +314,7 @@ def quick_settings(out, **changes) -> TrainSettings:
 def test_spawned_workers_train_like_forked_ones(tmp_path):
     """Spawned workers (one OpenCV thread each; the default on CUDA) give the same batches:
     the parent has used OpenCV before they start, which is what deadlocked forked ones."""
-    from doctrpp.training.loop import worker_start_method
+    from doctrpp.training.processes import worker_start_method
 
     assert worker_start_method("auto", "cuda") == "spawn"
     assert worker_start_method("auto", "cpu") == "fork"
@@ -373,7 +373,7 @@ def test_real_photo_check_is_logged_with_validation(tmp_path):
 def test_device_choice(tmp_path, capsys):
     """--device cpu trains on the CPU (CI's path); --device cuda without a GPU is a clear error."""
     from doctrpp.cli import main
-    from doctrpp.training.loop import default_workers
+    from doctrpp.training.processes import default_workers
 
     assert default_workers("cpu") == 1 and default_workers("cuda", world=1) >= 1
     state = train(quick_settings(tmp_path / "cpu", device="cpu", steps=1, validate_every=1))
@@ -388,7 +388,7 @@ def test_device_choice(tmp_path, capsys):
 def test_bf16_autocast_only_where_native_unless_asked(tmp_path, capsys):
     """Emulated bf16 made a CPU step 6.6x slower: the default follows the hardware, and the
     run says which precision it chose; --bf16 / --no-bf16 override it."""
-    from doctrpp.training.loop import bf16_is_native
+    from doctrpp.training.processes import bf16_is_native
 
     native = bf16_is_native(torch.device("cpu"))
     assert isinstance(native, bool)
@@ -404,7 +404,7 @@ def test_data_workers_cpu_time_is_counted():
     import subprocess
     import sys
 
-    from doctrpp.training.loop import children_cpu_seconds
+    from doctrpp.training.processes import children_cpu_seconds
 
     before = children_cpu_seconds()
     busy = "import time\nt = time.process_time()\nwhile time.process_time() - t < 0.3: pass"
