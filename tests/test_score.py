@@ -87,3 +87,31 @@ def test_score_refuses_bad_arguments_in_one_line(tmp_path, capsys):
     with pytest.raises(SystemExit):
         score([str(tmp_path / "missing.pt"), "--validation-start", "-1"])
     assert "--validation-start" in capsys.readouterr().err
+
+
+def test_score_cache_reuses_a_files_results_only_for_the_same_setting(
+    tiny_checkpoint, tmp_path, capsys, monkeypatch
+):
+    from doctrpp.training import score as score_module
+
+    cache = tmp_path / "cache"
+    args = [str(tiny_checkpoint), "--validation-size", "2", "--cache", str(cache)]
+    assert score_module.main(args) == 0
+    first = capsys.readouterr().out
+    assert len(list(cache.glob("*.json"))) == 2  # the identity map and the file
+    computed = []
+    real_score_file = score_module.score_file
+    monkeypatch.setattr(
+        score_module,
+        "score_file",
+        lambda *a, **k: computed.append(a[0]) or real_score_file(*a, **k),
+    )
+    assert score_module.main(args) == 0
+    assert capsys.readouterr().out == first and computed == []  # all from the cache
+    assert score_module.main([*args, "--flip-average"]) == 0  # another setting: scored
+    assert computed == [None, tiny_checkpoint]
+    other = tmp_path / "other.pt"
+    other.write_bytes(tiny_checkpoint.read_bytes())  # the same weights under another name
+    assert score_module.main([str(other), *args[1:]]) == 0
+    lines = [json.loads(line) for line in capsys.readouterr().out.strip().splitlines()]
+    assert lines[-1]["weights"] == str(other) and len(computed) == 2

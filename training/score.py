@@ -2,7 +2,7 @@
 
 usage: python -m doctrpp.training.score WEIGHTS... [--real-photos DIR] [--photos 16]
        [--peer uvdoc] [--flip-average] [--line-alignment] [--crop-size 288]
-       [--validation-start 0] [--validation-size 48]
+       [--validation-start 0] [--validation-size 48] [--frozen-validation NPZ] [--cache DIR]
 
 Prints one JSON line per file (map error and MS-SSIM-M per kind, and with --real-photos
 the reference-free scores per kind), the identity map first as the baseline, and with
@@ -21,6 +21,10 @@ distortion (`paired_local_distortion/KIND`, below zero is better). The
 trainer chooses snapshots on crops 0-47, so compare the chosen ones on fresh crops
 (`--validation-start 48 --validation-size 192`) before one ships: a lead won on the
 crops it was chosen by partly comes from that choice.
+
+`--cache DIR` keeps each file's results (`training.score_cache`) and reuses them where the
+weights, crops, real photos, switches and scoring code are all the same, so the default
+that every comparison pairs against is scored once per setting.
 """
 
 from __future__ import annotations
@@ -32,6 +36,7 @@ from pathlib import Path
 from doctrpp.export.checkpoint import load_model
 
 from .realcheck import real_photo_set, score_real, validation_maps
+from .score_cache import cached_score, setting_key
 from .validate import (
     crop_scores,
     load_validation_set,
@@ -139,6 +144,13 @@ def main(argv: list[str] | None = None) -> int:
         help="score on the validation crops frozen in this file; where it does not exist, "
         "generate them and freeze them there (keeps one yardstick across generator changes)",
     )
+    parser.add_argument(
+        "--cache",
+        type=Path,
+        metavar="DIR",
+        help="keep each file's per-crop results here and reuse them when the weights, crops, "
+        "real photos, switches and scoring code are the same (the default is scored once)",
+    )
     args = parser.parse_args(argv)
     if args.validation_size < 1 or args.validation_start < 0:
         parser.error("--validation-size must be >= 1 and --validation-start >= 0")
@@ -152,10 +164,20 @@ def main(argv: list[str] | None = None) -> int:
         if args.frozen_validation:
             save_validation_set(validation, args.frozen_validation)
     real_items = real_photo_set(args.real_photos, args.photos) if args.real_photos else []
+    key = (
+        setting_key(validation, real_items, args.flip_average, args.line_alignment)
+        if args.cache
+        else ""
+    )
     rows = {}
     for path in [None, *args.weights]:
-        scores, rows[path] = score_file(
-            path, validation, real_items, args.flip_average, args.line_alignment
+        scores, rows[path] = cached_score(
+            args.cache,
+            path,
+            key,
+            lambda path=path: score_file(
+                path, validation, real_items, args.flip_average, args.line_alignment
+            ),
         )
         print(json.dumps(scores), flush=True)
     kinds = [item.kind for item in validation]
