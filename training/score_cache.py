@@ -36,15 +36,13 @@ def _package_digest() -> str:
     source checkout and in an installed package alike."""
     digest = hashlib.sha256()
     for name in SCORED_PACKAGES:
-        spec = importlib.util.find_spec(name)
-        folders = list(spec.submodule_search_locations or []) if spec else []
-        for folder in folders:
-            # the core's search path can hold the checkout's root (doctrpp/__init__.py):
-            # its own files only there, not the whole tree below
-            sources = Path(folder).glob("*.py") if name == "doctrpp" else Path(folder).rglob("*.py")
-            for source in sorted(sources):
-                digest.update(f"{name}/{source.relative_to(folder)}".encode())
-                digest.update(source.read_bytes())
+        folder = Path(importlib.util.find_spec(name).origin).parent
+        # the core's own modules only: in an installed package its folder also holds the
+        # stage folders, hashed as packages of their own
+        sources = folder.glob("*.py") if name == "doctrpp" else folder.rglob("*.py")
+        for source in sorted(sources):
+            digest.update(f"{name}/{source.relative_to(folder)}".encode())
+            digest.update(source.read_bytes())
     return digest.hexdigest()
 
 
@@ -79,6 +77,5 @@ def cached_score(
         scores = {**stored["scores"], "weights": str(path) if path else "identity"}
         return scores, stored["rows"]
     scores, rows = compute()
-    cache.mkdir(parents=True, exist_ok=True)
     write_bytes_atomically(entry, json.dumps({"scores": scores, "rows": rows}).encode())
     return scores, rows
