@@ -63,3 +63,19 @@ def test_rescore_commands_compare_with_the_shipped_default(tmp_path, capsys):
         assert command.index("doctrpp_default.pt") < command.index("step0000250.pt")
         assert "--validation-start 48 --validation-size 192" in command
     assert commands[1].endswith("--flip-average --line-alignment")
+
+
+def test_cross_shot_agreement_orders_the_shortlist_where_logged(tmp_path, capsys):
+    records = [_record(250, 12.0, 1.30), _record(500, 11.9, 1.05)]
+    records[0]["real/cross_shot_ms_ssim"] = 0.44
+    records[1]["real/cross_shot_ms_ssim"] = 0.47  # lower coherence, better agreement
+    run_dir = _run(tmp_path, records)
+    (run_dir / "snapshots").mkdir()
+    (run_dir / "snapshots" / "step0000500.pt").write_bytes(b"")
+    assert main([str(run_dir)]) == 0
+    out = capsys.readouterr().out
+    steps = [line.split("|")[2].strip() for line in out.splitlines() if line.startswith("| s1 ")]
+    assert steps == ["500", "250"]
+    assert "| 0.4700 |" in out
+    cross_shot = [line for line in out.splitlines() if "training.cross_shot" in line]
+    assert len(cross_shot) == 1 and "doctrpp_default.pt " in cross_shot[0]

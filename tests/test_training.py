@@ -248,13 +248,17 @@ def test_init_continues_from_weights_only_file(tmp_path):
 
 
 def test_real_photo_check_is_logged_with_validation(tmp_path):
-    """--real-photos: reference-free scores per kind at each validation, identity first."""
+    """--real-photos: reference-free scores per kind at each validation, identity first;
+    --cross-shot-pairs adds the two shots' agreement."""
     import json
 
     photos = tmp_path / "photos"
     for i in range(2):
-        write_image(photos / f"p{i}.jpg", generate(i, "complete", size=400).image)
-    train(quick_settings(tmp_path / "run", real_photos=photos, real_photos_count=2))
+        for shot in (1, 2):
+            page = generate(2 * i + shot, "complete", size=400).image
+            write_image(photos / f"{i}_{shot}.jpg", page)
+    settings = quick_settings(tmp_path / "run", real_photos=photos, real_photos_count=2)
+    train(dataclasses.replace(settings, cross_shot_pairs=2))
     records = [
         json.loads(x) for x in (tmp_path / "run" / "validation.jsonl").read_text().splitlines()
     ]
@@ -262,6 +266,9 @@ def test_real_photo_check_is_logged_with_validation(tmp_path):
     for kind in ("complete", "partial", "none"):
         assert 0 <= records[-1][f"real/black_share/{kind}"] <= 1
         assert f"real/straightness_ratio/{kind}" in records[-1]
+    for record in (records[0], records[-1]):
+        assert 0 < record["real/cross_shot_ms_ssim"] < 1
+        assert record["real/cross_shot_local_distortion"] >= 0
 
 
 def test_device_choice(tmp_path, capsys):
@@ -337,6 +344,9 @@ def test_loss_terms_train_and_the_cli_rejects_negative_weights(tmp_path, capsys)
     code = main(["train", "--out", str(tmp_path / "r"), "--real-photos-count", "0"])
     assert code == 2
     assert "--real-photos-count must be >= 1" in capsys.readouterr().err
+    code = main(["train", "--out", str(tmp_path / "r"), "--cross-shot-pairs", "4"])
+    assert code == 2
+    assert "--cross-shot-pairs needs --real-photos" in capsys.readouterr().err
     snapshot = sorted((tmp_path / "g" / "snapshots").glob("step*.pt"))[-1]
     code = main(["train", "--out", str(tmp_path / "s"), "--resume", str(snapshot)])
     assert code == 2  # a weights-only snapshot has no optimiser: one line naming --init

@@ -4,11 +4,13 @@ usage: python -m doctrpp.training.choose RUN_DIR [RUN_DIR ...] [--margin 0.3] [-
 
 The rule: among validations whose real-photo black share is at most --max-black on every
 kind, keep those within --margin px of the lowest generated map error (all kinds), then
-order them by mean real coherence. Coherence from the in-loop check is noisy (16-32
-photos) and the map error was the ground the shortlist was chosen on, so the shortlist is
-re-scored with `python -m doctrpp.training.score` on 48 photos and on 192 fresh generated
-crops (48-239 of the validation stream), against the shipped default crop by crop, before
-anything is published; this prints those commands (raw maps, and as `rectify` runs them).
+order them by the real photos' cross-shot agreement where the run logged it
+(`--cross-shot-pairs`), else by mean real coherence. The in-loop real scores are noisy and
+the map error was the ground the shortlist was chosen on, so the shortlist is re-scored
+with `python -m doctrpp.training.score` on 48 photos and on 192 fresh generated crops
+(48-239 of the validation stream) and with `python -m doctrpp.training.cross_shot`, against
+the shipped default photo by photo and crop by crop, before anything is published; this
+prints those commands (raw maps, and as `rectify` runs them).
 """
 
 from __future__ import annotations
@@ -52,29 +54,39 @@ class Candidate:
         values = self.real("coherence_ratio")
         return sum(values) / len(values)
 
+    @property
+    def cross_shot(self) -> float | None:
+        value = self.record.get("real/cross_shot_ms_ssim")
+        return None if value is None else float(value)
+
 
 def shortlist(candidates: list[Candidate], margin: float, max_black: float) -> list[Candidate]:
     """Candidates within `margin` px of the lowest map error among those with little black,
-    best mean real coherence first."""
+    best cross-shot agreement first where every one has it, else best mean real coherence."""
     allowed = [c for c in candidates if max(c.real("black_share")) <= max_black]
     if not allowed:
         return []
     lowest = min(c.map_error for c in allowed)
     near = [c for c in allowed if c.map_error <= lowest + margin]
+    if all(c.cross_shot is not None for c in near):
+        return sorted(near, key=lambda c: -c.cross_shot)
     return sorted(near, key=lambda c: -c.mean_coherence)
 
 
 def markdown_table(candidates: list[Candidate], untouched: list[float]) -> str:
     lines = [
-        "| run | step | map error all px | real coherence c / p / n | black max | snapshot |",
-        "|---|---|---|---|---|---|",
+        "| run | step | map error all px | real coherence c / p / n | cross-shot MS-SSIM "
+        "| black max | snapshot |",
+        "|---|---|---|---|---|---|---|",
     ]
     for c in candidates:
         coherence = " / ".join(f"{v:.3f}" for v in c.real("coherence_ratio"))
         below = any(v < u for v, u in zip(c.real("coherence_ratio"), untouched, strict=True))
+        cross_shot = "—" if c.cross_shot is None else f"{c.cross_shot:.4f}"
         lines.append(
             f"| {c.run_dir.name} | {c.step:,} | {c.map_error:.2f} | {coherence}"
-            f"{' (below untouched)' if below else ''} | {max(c.real('black_share')):.3f} | "
+            f"{' (below untouched)' if below else ''} | {cross_shot} | "
+            f"{max(c.real('black_share')):.3f} | "
             f"{c.snapshot if c.snapshot.is_file() else '(no snapshot)'} |"
         )
     return "\n".join(lines)
@@ -115,9 +127,10 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def rescore_commands(snapshots: list[str]) -> str:
-    """The two re-scorings the rule asks for, the shipped default first so that each
-    snapshot is compared with it crop by crop (a snapshot ships only if it beats it): raw
-    maps (the rule's coherence) and as `rectify` runs them, on fresh generated crops."""
+    """The re-scorings the rule asks for, the shipped default first so that each snapshot
+    is compared with it crop by crop (a snapshot ships only if it beats it): raw maps (the
+    rule's coherence) and as `rectify` runs them, on fresh generated crops, and the two
+    shots of each real document (`training.cross_shot`)."""
     weights = " ".join([f"export/weights/{DEFAULT_NAME}", *snapshots])
     command = (
         f"python -m doctrpp.training.score {weights} "
@@ -125,7 +138,13 @@ def rescore_commands(snapshots: list[str]) -> str:
         f"--validation-start {FRESH_START} --validation-size {FRESH_COUNT}"
     )
     pipeline = f"{command} --flip-average --line-alignment"
-    return f"re-score, raw: {command}\nas rectify runs them: {pipeline}"
+    cross_shot = (
+        f"python -m doctrpp.training.cross_shot {weights} --photos ../shared/realphotos/docunet_dev"
+    )
+    return (
+        f"re-score, raw: {command}\nas rectify runs them: {pipeline}\n"
+        f"real photos, two shots each: {cross_shot}"
+    )
 
 
 if __name__ == "__main__":

@@ -122,6 +122,14 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "no-boundary crop (default 16; more is less noisy and slower per validation)",
     )
     p.add_argument(
+        "--cross-shot-pairs",
+        type=int,
+        default=0,
+        metavar="N",
+        help="also compare the two rectified shots of the first N documents of --real-photos "
+        "(<doc>_1 and <doc>_2; `training.cross_shot`) at each validation (default 0: off)",
+    )
+    p.add_argument(
         "--gradient-loss",
         type=float,
         default=0.0,
@@ -220,6 +228,10 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--real-photos {args.real_photos}: no such folder")
     if args.real_photos_count < 1:
         raise CliError("--real-photos-count must be >= 1")
+    if args.cross_shot_pairs < 0:
+        raise CliError("--cross-shot-pairs must be >= 0")
+    if args.cross_shot_pairs and not args.real_photos:
+        raise CliError("--cross-shot-pairs needs --real-photos (the folder of <doc>_1/_2 shots)")
     if args.gradient_loss < 0:
         raise CliError("--gradient-loss must be >= 0")
     if args.photometric_loss < 0:
@@ -261,6 +273,7 @@ def run(args: argparse.Namespace) -> int:
         init=args.init,
         real_photos=args.real_photos,
         real_photos_count=args.real_photos_count,
+        cross_shot_pairs=args.cross_shot_pairs,
         page_reuse=args.page_reuse,
         sample_reuse=args.sample_reuse,
         gradient_loss=args.gradient_loss,

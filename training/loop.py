@@ -17,6 +17,8 @@ from doctrpp.export.config import ModelConfig
 from doctrpp.export.model import DocTrPP
 
 from .checkpoints import RESUME_KEYS, read_training_checkpoint, save_checkpoint
+from .cross_shot import model_check as cross_shot_check
+from .cross_shot import shot_pairs
 from .data import FolderCrops, GeneratedCrops, StreamSampler, reuse_window
 from .losses import map_loss
 from .processes import (
@@ -63,6 +65,7 @@ class TrainSettings:
     sample_reuse: int = 1  # each generated crop is shown this many times (fresh jitter)
     real_photos: Path | None = None  # real photos for the reference-free check at validation
     real_photos_count: int = 16  # photos used (each as a complete, partial and none crop)
+    cross_shot_pairs: int = 0  # documents of real_photos whose two shots are compared
     gradient_loss: float = 0.0  # weight of L1 on the maps' 8-px differences (0: the paper's loss)
     photometric_loss: float = 0.0  # weight of L1 between crops rectified by predicted/true maps
     ms_ssim_loss: float = 0.0  # weight of 1 - MS-SSIM between those two rectified crops
@@ -188,9 +191,14 @@ def train(s: TrainSettings) -> dict:
     real_items = []
     if env.main and s.real_photos:
         real_items = real_photo_set(s.real_photos, s.real_photos_count)
+    shot_pairs_checked = []
+    if env.main and s.real_photos and s.cross_shot_pairs:
+        shot_pairs_checked = shot_pairs(s.real_photos)[: s.cross_shot_pairs]
     log = RunLog(s.out) if env.main else None
     if env.main and not (s.out / "validation.jsonl").exists():
         baseline = validation_scores(None, validation, real_items)
+        if shot_pairs_checked:
+            baseline.update(cross_shot_check(None, shot_pairs_checked))
         log.validation({"step": 0, "identity": True, **baseline})
         print("identity baseline:", json.dumps({k: round(v, 3) for k, v in baseline.items()}))
 
@@ -229,6 +237,8 @@ def train(s: TrainSettings) -> dict:
 
     def run_validation() -> None:
         scores = validation_scores(model, validation, real_items, autocast_dtype=autocast_dtype)
+        if shot_pairs_checked:
+            scores.update(cross_shot_check(model, shot_pairs_checked))
         record = {
             "step": state["step"],
             "samples_seen": state["samples_seen"],

