@@ -5,7 +5,7 @@
 # the source tree runs as it is (run from the repository root). Its 16 cores generate the
 # crops (the bottleneck there: about 100 samples/s in session 27), hence --sample-reuse 2.
 #
-# usage (repository root): [DEVICE=cuda] [STEPS=N] [LR=2e-4] [INIT=training/resume/bb24_c3_s31d_end.pt]
+# usage (repository root): [DEVICE=cuda] [STEPS=N] [LR=2e-4] [INIT=training/resume/bb24_c3_s40lo_end.pt]
 #        [BACKBONE_WIDTHS="24 48 72"] [COARSE_LAYERS=3] [PHOTOMETRIC=60] bash scripts/gpu_train.sh [MINUTES]
 # INIT: the weights to continue from (training/resume/README.md says which is the long run's end).
 # BACKBONE_WIDTHS / COARSE_LAYERS: first widen INIT's feature encoder to these widths and/or
@@ -28,7 +28,7 @@ out="${OUT:-runs/gpu_out}"
 run=/tmp/gpu_run
 rm -rf "$run" /tmp/gpu_probe  # scratch: a warm machine keeps the last call's
 mkdir -p "$out"
-init="${INIT:-training/resume/bb24_c3_s31d_end.pt}"
+init="${INIT:-training/resume/bb24_c3_s40lo_end.pt}"
 grow_args=()
 if [ -n "${BACKBONE_WIDTHS:-}" ]; then
     # shellcheck disable=SC2206  # three widths, split on purpose
