@@ -347,6 +347,12 @@ def test_loss_terms_train_and_the_cli_rejects_negative_weights(tmp_path, capsys)
     code = main(["train", "--out", str(tmp_path / "r"), "--cross-shot-pairs", "4"])
     assert code == 2
     assert "--cross-shot-pairs needs --real-photos" in capsys.readouterr().err
+    photos = tmp_path / "single_shots"
+    photos.mkdir()
+    write_image(photos / "a.png", np.zeros((8, 8, 3), np.uint8))
+    args = ["--real-photos", str(photos), "--cross-shot-pairs", "4"]
+    assert main(["train", "--out", str(tmp_path / "r"), *args]) == 2
+    assert "has no <doc>_1/<doc>_2 photos" in capsys.readouterr().err
     snapshot = sorted((tmp_path / "g" / "snapshots").glob("step*.pt"))[-1]
     code = main(["train", "--out", str(tmp_path / "s"), "--resume", str(snapshot)])
     assert code == 2  # a weights-only snapshot has no optimiser: one line naming --init

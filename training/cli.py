@@ -232,6 +232,8 @@ def run(args: argparse.Namespace) -> int:
         raise CliError("--cross-shot-pairs must be >= 0")
     if args.cross_shot_pairs and not args.real_photos:
         raise CliError("--cross-shot-pairs needs --real-photos (the folder of <doc>_1/_2 shots)")
+    if args.cross_shot_pairs and not _has_shot_pairs(args.real_photos):
+        raise CliError(f"--cross-shot-pairs: {args.real_photos} has no <doc>_1/<doc>_2 photos")
     if args.gradient_loss < 0:
         raise CliError("--gradient-loss must be >= 0")
     if args.photometric_loss < 0:
@@ -292,3 +294,9 @@ def run(args: argparse.Namespace) -> int:
         f"checkpoint {args.out / 'last.pth'}"
     )
     return 0
+
+
+def _has_shot_pairs(folder: Path) -> bool:
+    from .cross_shot import shot_pairs  # imported here: it loads numpy, OpenCV and torch
+
+    return bool(shot_pairs(folder))
