@@ -91,3 +91,13 @@ def test_cli_refuses_a_folder_without_pairs(tmp_path, capsys):
         main(["--photos", str(tmp_path)])
     assert stop.value.code == 2
     assert "fewer than two documents" in capsys.readouterr().err
+
+
+def test_cli_names_an_unreadable_photo_in_one_line(tmp_path):
+    for document in ("1", "2"):
+        cv2.imwrite(str(tmp_path / f"{document}_1.png"), _page(0, (16, 16)))
+        cv2.imwrite(str(tmp_path / f"{document}_2.png"), _page(1, (16, 16)))
+    (tmp_path / "2_2.png").write_bytes(b"not a png")
+    with pytest.raises(SystemExit) as stop:
+        main(["--photos", str(tmp_path)])
+    assert str(stop.value) == f"error: {tmp_path / '2_2.png'}: not a readable image"

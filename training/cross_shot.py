@@ -31,13 +31,12 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-import cv2
 import numpy as np
 
 from doctrpp.benchmarks.metrics import local_distortion, ms_ssim
 from doctrpp.files import write_bytes_atomically
 from doctrpp.progress import progress
-from doctrpp.runtime.imageio import image_files
+from doctrpp.runtime.imageio import ImageError, image_files, read_image
 from doctrpp.runtime.processing import applied_map, rectify_with_map
 
 from .validate import paired_difference
@@ -66,20 +65,13 @@ def agreement(first: np.ndarray, second: np.ndarray) -> dict[str, float]:
     }
 
 
-def read_photo(path: Path) -> np.ndarray:
-    image = cv2.imread(str(path), cv2.IMREAD_COLOR)
-    if image is None:
-        raise SystemExit(f"cannot read image: {path}")
-    return image
-
-
 def pair_rows(
     rectify: Rectify, pairs: Sequence[tuple[Path, Path]], label: str = "pairs", bar: bool = True
 ) -> list[dict]:
     """`agreement` of each pair's two shots after `rectify`, a row per document."""
     rows = []
     for first, second in progress(pairs, len(pairs), label, enabled=bar):
-        scores = agreement(rectify(read_photo(first)), rectify(read_photo(second)))
+        scores = agreement(rectify(read_image(first)), rectify(read_image(second)))
         rows.append({"document": first.stem.rpartition("_")[0], **scores})
     return rows
 
@@ -208,7 +200,10 @@ def main(argv: list[str] | None = None) -> int:
         entries.append(("UVDoc (peer)", uvdoc_rectifier()))
     rows = []
     for name, rectify in entries:
-        rows.append(pair_rows(rectify, pairs, Path(name).name))
+        try:
+            rows.append(pair_rows(rectify, pairs, Path(name).name))
+        except ImageError as err:
+            raise SystemExit(f"error: {err}") from None
         print(json.dumps({"entry": name, "pairs": len(pairs), **summary(rows[-1])}), flush=True)
     if args.weights:  # each further entry against the first weights file, document by document
         for (name, _), entry_rows in list(zip(entries, rows, strict=True))[2:]:
