@@ -41,9 +41,6 @@ def generated_probes(per_kind: int) -> list[Probe]:
     return probes
 
 
-REAL_KINDS = ("real complete", "real partial", "real none")
-
-
 def photo_probes(folder: Path | None, limit: int = 12) -> list[Probe]:
     """Crops of the three kinds cut from real photos (the user's `folder`, at most `limit`
     spread over it; else the two document photos scikit-image ships, if installed)."""
@@ -146,3 +143,32 @@ def describe(model: Path) -> dict:
         "checkpoint_note": meta.get(contract.META_CHECKPOINT_NOTE, ""),
         "checkpoint_sha256": meta.get(contract.META_CHECKPOINT_SHA256, ""),
     }
+
+
+def cross_shot_section(
+    models: list[Path],
+    reference: Path,
+    photos: Path,
+    pairs: int | None,
+    threads: int,
+    peers: bool,
+    status=print,
+) -> dict | None:
+    """Cross-shot agreement of the untouched photos, each model file (run as `doctrpp
+    rectify` runs it) and UVDoc (when installed and `peers`) on the first `pairs` documents
+    with two shots in `photos` (None: all); None where the folder holds fewer than two."""
+    from doctrpp.runtime.rectifier import Rectifier
+
+    from .cross_shot import report_entries, shot_pairs
+    from .peers import UVDocPeer, uvdoc_model_path
+
+    documents = shot_pairs(photos)[:pairs]
+    if len(documents) < 2:
+        return None
+    entries = [("untouched photos", lambda image: image)]
+    entries += [(m.name, Rectifier(m, threads=threads).rectify) for m in models]
+    uvdoc = uvdoc_model_path() if peers else None
+    if uvdoc is not None:
+        entries.append(("UVDoc (peer)", UVDocPeer(uvdoc, threads).rectify))
+    rows = report_entries(entries, documents, reference.name, status)
+    return {"photos": str(photos), "documents": len(documents), "rows": rows}

@@ -42,6 +42,15 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         help="folder of real photos: up to 12 of them, each cut into complete, partial and "
         "no-boundary crops (default: scikit-image's two document photos)",
     )
+    p.add_argument(
+        "--cross-shot-pairs",
+        type=int,
+        metavar="N",
+        help="with --photos: rectify both shots of the first N documents (<doc>_1, <doc>_2) "
+        "with each model as `doctrpp rectify` does and compare them, the held-out check's "
+        "measures with one shot standing in for the flat scan (default: every document with "
+        "two shots; 0: off; about a minute per model for 48)",
+    )
     p.add_argument("--note", help="a line for the report (e.g. which weights these are)")
     p.add_argument("--no-rss", action="store_true", help="skip the peak-memory subprocesses")
     p.add_argument(
@@ -83,6 +92,10 @@ def run(args: argparse.Namespace) -> int:
         raise CliError("--runs must be >= 1 and --per-kind >= 0")
     if args.photos and not args.photos.is_dir():
         raise CliError(f"--photos {args.photos}: no such folder")
+    if args.cross_shot_pairs is not None and (
+        args.cross_shot_pairs < 0 or args.cross_shot_pairs == 1
+    ):
+        raise CliError("--cross-shot-pairs must be 0 (off) or at least 2")
     models = [describe(m) for m in args.models]
     reference = args.reference or next(
         (m for m, d in zip(args.models, models, strict=True) if d["precision"] == "fp32"),
@@ -126,6 +139,19 @@ def run(args: argparse.Namespace) -> int:
         from .peers import peer_rows
 
         peers = peer_rows(probes, reference, list(args.threads), args.runs, status=_status)
+    cross_shot = None
+    if args.photos and args.cross_shot_pairs != 0:
+        from .bench import cross_shot_section
+
+        cross_shot = cross_shot_section(
+            list(args.models),
+            reference,
+            args.photos,
+            args.cross_shot_pairs,
+            max(args.threads),
+            peers=not args.no_peers,
+            status=_status,
+        )
     pipeline = None
     if args.pipeline:
         from .pipeline import pipeline_report
@@ -136,6 +162,7 @@ def run(args: argparse.Namespace) -> int:
         "untouched": untouched_accuracy(probes),
         "load_average": load_average(),
         "pipeline": pipeline,
+        "cross_shot": cross_shot,
         "environment": environment(),
         "settings": {
             "runs": args.runs,

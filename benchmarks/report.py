@@ -8,19 +8,12 @@ from pathlib import Path
 from doctrpp.export.tolerances import INT8_DRIFT_TARGET_PX
 from doctrpp.files import write_bytes_atomically
 
+from .report_sections import REAL_KINDS, fmt, markdown_sections_for_peers
+
 GENERATED_KINDS = ("complete", "partial", "none")
-REAL_KINDS = ("real complete", "real partial", "real none")
 KINDS = (*GENERATED_KINDS, *REAL_KINDS)
 INT8_LATENCY_TARGET = 0.67  # x ONNX fp32 at 2 threads; and not slower at 1 thread
 NOISY_SPREAD = 1.25  # p90 / median above this: timings are noisy
-
-
-def _fmt(value, digits: int = 3) -> str:
-    if value is None:
-        return "–"
-    if isinstance(value, float):
-        return f"{value:.{digits}f}"
-    return str(value)
 
 
 def markdown(report: dict) -> str:
@@ -53,16 +46,16 @@ def markdown(report: dict) -> str:
         one, two = m["latency"].get("1"), m["latency"].get("2")
         lines.append(
             f"| {m['name']} | {m['format']} | {m['precision']} | {m['file_mb']:.1f} | "
-            f"{_fmt(one and one['median_ms'], 0)} / {_fmt(one and one['p90_ms'], 0)} | "
-            f"{_fmt(one and one['fps'], 2)} | {_fmt(two and two['median_ms'], 0)} / "
-            f"{_fmt(two and two['p90_ms'], 0)} | {_fmt(two and two['fps'], 2)} | "
-            f"{_fmt(m.get('latency_ratio'), 2)}x | {_fmt(m.get('peak_rss_mb'), 0)} |"
+            f"{fmt(one and one['median_ms'], 0)} / {fmt(one and one['p90_ms'], 0)} | "
+            f"{fmt(one and one['fps'], 2)} | {fmt(two and two['median_ms'], 0)} / "
+            f"{fmt(two and two['p90_ms'], 0)} | {fmt(two and two['fps'], 2)} | "
+            f"{fmt(m.get('latency_ratio'), 2)}x | {fmt(m.get('peak_rss_mb'), 0)} |"
         )
     for extra in report.get("extra_rows", []):
         lines.append(
             f"| {extra['name']} | {extra['format']} | {extra['precision']} | – | – | – | "
-            f"{_fmt(extra['median_ms'], 0)} / {_fmt(extra['p90_ms'], 0)} | "
-            f"{_fmt(1000 / extra['median_ms'], 2)} | {_fmt(extra.get('latency_ratio'), 2)}x"
+            f"{fmt(extra['median_ms'], 0)} / {fmt(extra['p90_ms'], 0)} | "
+            f"{fmt(1000 / extra['median_ms'], 2)} | {fmt(extra.get('latency_ratio'), 2)}x"
             " | – |"
         )
     lines += [
@@ -81,9 +74,9 @@ def markdown(report: dict) -> str:
             row = m["accuracy"].get(kind, {})
             if "drift_mean_px" in row:
                 lines.append(
-                    f"| {m['name']} | {kind} | {_fmt(row['drift_mean_px'])} | "
-                    f"{_fmt(row['drift_max_px'])} | {_fmt(row['ms_ssim_m_vs_ref'])} | "
-                    f"{_fmt(row['ld_m_vs_ref'], 2)} |"
+                    f"| {m['name']} | {kind} | {fmt(row['drift_mean_px'])} | "
+                    f"{fmt(row['drift_max_px'])} | {fmt(row['ms_ssim_m_vs_ref'])} | "
+                    f"{fmt(row['ld_m_vs_ref'], 2)} |"
                 )
     lines += [
         "",
@@ -94,16 +87,16 @@ def markdown(report: dict) -> str:
     ]
     for kind, row in sorted(report.get("untouched", {}).items()):
         lines.append(
-            f"| untouched input | {kind} | {_fmt(row['gt_map_error_px'], 2)} | "
-            f"{_fmt(row['gt_ms_ssim_m'])} |"
+            f"| untouched input | {kind} | {fmt(row['gt_map_error_px'], 2)} | "
+            f"{fmt(row['gt_ms_ssim_m'])} |"
         )
     for m in [*report["models"], *report.get("peers", [])]:
         for kind in GENERATED_KINDS:
             row = m["accuracy"].get(kind, {})
             if "gt_map_error_px" in row:
                 lines.append(
-                    f"| {m['name']} | {kind} | {_fmt(row['gt_map_error_px'], 2)} | "
-                    f"{_fmt(row['gt_ms_ssim_m'])} |"
+                    f"| {m['name']} | {kind} | {fmt(row['gt_map_error_px'], 2)} | "
+                    f"{fmt(row['gt_ms_ssim_m'])} |"
                 )
     lines += markdown_sections_for_peers(report)
     if report.get("targets"):
@@ -116,7 +109,7 @@ def markdown(report: dict) -> str:
         ]
         for t in report["targets"]:
             lines.append(
-                f"| {t['model']} | {t['check']} | {_fmt(t['value'])} | {t['target']} | "
+                f"| {t['model']} | {t['check']} | {fmt(t['value'])} | {t['target']} | "
                 f"{'yes' if t['met'] else '**no**'} |"
             )
     if report.get("pipeline"):
@@ -124,73 +117,6 @@ def markdown(report: dict) -> str:
 
         lines += pipeline_markdown(report["pipeline"])
     return "\n".join(lines) + "\n"
-
-
-def markdown_sections_for_peers(report: dict) -> list[str]:
-    """The reference-free table (models and peers) and the peers' latency table."""
-    return reference_free_markdown(report) + peers_markdown(report)
-
-
-def reference_free_markdown(report: dict) -> list[str]:
-    """Real-photo crops have no flat scan: straightness of text lines against the untouched
-    crop's (ratio > 1 = straighter), black share and kept share of the output."""
-    rows = [m for m in [*report["models"], *report.get("peers", [])] if _has_real(m)]
-    if not rows:
-        return []
-    lines = [
-        "",
-        "## Real-photo crops (reference-free)",
-        "",
-        "Text-line coherence (lines aligned across the full width; sees curls) and "
-        "straightness (local tilt) of the result / of the untouched crop (1 = unchanged, "
-        "higher = better; blind to content cut away and to stretching along lines), "
-        "share of the output sampled from outside the photo (black) and share of the photo "
-        "kept; bending: the map's mean non-projective part in px of its 288 grid (what it "
-        "does beyond a perspective; curled pages need some). The untouched crop scores "
-        "1 / 1 / 0 / 1 / 0.",
-        "",
-        "| model | kind | coherence ratio | straightness ratio | black share | kept share "
-        "| bending px |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for m in rows:
-        for kind in REAL_KINDS:
-            row = m["accuracy"].get(kind, {})
-            if "straightness_ratio" in row:
-                lines.append(
-                    f"| {m['name']} | {kind} | {_fmt(row.get('coherence_ratio'))} | "
-                    f"{_fmt(row['straightness_ratio'])} | {_fmt(row['black_share'])} | "
-                    f"{_fmt(row['kept_share'])} | {_fmt(row.get('nonprojective_px'))} |"
-                )
-    return lines
-
-
-def _has_real(model: dict) -> bool:
-    return any("straightness_ratio" in model["accuracy"].get(k, {}) for k in REAL_KINDS)
-
-
-def peers_markdown(report: dict) -> list[str]:
-    if not report.get("peers"):
-        return []
-    lines = [
-        "",
-        "## Peers (for scale)",
-        "",
-        "Other published models on the same crops (accuracy rows above); latency timed run "
-        "by run against our reference model in the same rounds.",
-        "",
-        "| peer | format | precision | input | MB | threads | median / p90 ms | vs our reference |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
-    for peer in report["peers"]:
-        for threads, t in sorted(peer["latency"].items()):
-            lines.append(
-                f"| {peer['name']} | {peer['format']} | {peer['precision']} | "
-                f"{peer['input']} | {peer['file_mb']:.1f} | {threads} | "
-                f"{_fmt(t['median_ms'], 0)} / {_fmt(t['p90_ms'], 0)} | "
-                f"{_fmt(t['latency_ratio'], 2)}x |"
-            )
-    return lines
 
 
 def _worst(model: dict, kinds: tuple[str, ...], metric: str) -> float | None:

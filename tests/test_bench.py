@@ -123,3 +123,44 @@ def test_recommendations_name_a_slow_int8_file_once():
     assert lines[0].startswith("phone: **q.tflite**") and "over the int8 speed target" in lines[0]
     assert lines[-1].startswith("faithful but not fast enough") and "q.onnx" in lines[-1]
     assert "q.tflite" not in lines[-1]
+
+
+def _shots(folder, documents: int = 2) -> None:
+    """`documents` pairs of small gray pages with dark bars, the second shot tilted."""
+    import cv2
+    import numpy as np
+
+    folder.mkdir()
+    for document in range(1, documents + 1):
+        page = np.full((160, 120, 3), 235, np.uint8)
+        for row in range(10, 150, 12):
+            page[row : row + 4, 8 + document : 100] = 40
+        tilted = cv2.warpAffine(page, cv2.getRotationMatrix2D((60, 80), 3, 1.0), (120, 160))
+        cv2.imwrite(str(folder / f"{document}_1.png"), page)
+        cv2.imwrite(str(folder / f"{document}_2.png"), tilted)
+
+
+def test_bench_scores_cross_shot_agreement_of_photo_pairs(tiny_onnx, tmp_path):
+    photos, out = tmp_path / "photos", tmp_path / "report"
+    _shots(photos)
+    args = ["bench", "--models", str(tiny_onnx), "--out", str(out), "--runs", "1"]
+    args += ["--per-kind", "0", "--no-rss", "--no-peers", "--threads", "1", "--photos", str(photos)]
+    assert main(args) == 0
+    section = json.loads((out / "report.json").read_text())["cross_shot"]
+    assert section["documents"] == 2
+    untouched, model = section["rows"]
+    assert untouched["name"] == "untouched photos" and model["name"] == tiny_onnx.name
+    assert 0 < untouched["cross_shot_ms_ssim"] < 1 and 0 < model["cross_shot_ms_ssim"] <= 1
+    assert untouched["paired_against"] == tiny_onnx.name and "paired_ms_ssim" not in model
+    markdown = (out / "report.md").read_text()
+    assert "## Real photos: cross-shot agreement" in markdown
+    assert f"| {tiny_onnx.name} | " in markdown.split("cross-shot agreement")[1]
+    off = tmp_path / "off"
+    assert main([*args[:4], str(off), *args[5:], "--cross-shot-pairs", "0"]) == 0
+    assert json.loads((off / "report.json").read_text())["cross_shot"] is None
+
+
+def test_bench_refuses_a_single_cross_shot_pair(tiny_onnx, tmp_path, capsys):
+    args = ["bench", "--models", str(tiny_onnx), "--out", str(tmp_path / "r")]
+    assert main([*args, "--cross-shot-pairs", "1"]) == 2
+    assert "--cross-shot-pairs must be 0 (off) or at least 2" in capsys.readouterr().err

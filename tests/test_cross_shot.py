@@ -8,7 +8,8 @@ import cv2
 import numpy as np
 import pytest
 
-from doctrpp.training.cross_shot import agreement, main, paired, shot_pairs
+from doctrpp.benchmarks.cross_shot import agreement, paired, shot_pairs
+from doctrpp.training.cross_shot import main
 
 
 def _page(seed: int, size: tuple[int, int] = (240, 180)) -> np.ndarray:

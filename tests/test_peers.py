@@ -8,7 +8,7 @@ import pytest
 from doctrpp import contract
 from doctrpp.benchmarks import peers
 from doctrpp.benchmarks.metrics import map_drift
-from doctrpp.benchmarks.report import markdown_sections_for_peers
+from doctrpp.benchmarks.report_sections import markdown_sections_for_peers
 
 
 def test_uvdoc_grid_becomes_our_backward_map(report_difference):

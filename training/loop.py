@@ -13,12 +13,12 @@ from pathlib import Path
 import torch
 from torch.utils.data import DataLoader
 
+from doctrpp.benchmarks.cross_shot import shot_pairs
 from doctrpp.export.config import ModelConfig
 from doctrpp.export.model import DocTrPP
 
 from .checkpoints import RESUME_KEYS, read_training_checkpoint, save_checkpoint
 from .cross_shot import model_check as cross_shot_check
-from .cross_shot import shot_pairs
 from .data import FolderCrops, GeneratedCrops, StreamSampler, reuse_window
 from .losses import map_loss
 from .processes import (

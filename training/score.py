@@ -33,6 +33,7 @@ import argparse
 import json
 from pathlib import Path
 
+from doctrpp.benchmarks.metrics import paired_difference
 from doctrpp.export.checkpoint import load_model
 
 from .realcheck import real_photo_set, score_real, validation_maps
@@ -40,7 +41,6 @@ from .score_cache import cached_score, setting_key
 from .validate import (
     crop_scores,
     load_validation_set,
-    paired_difference,
     save_validation_set,
     score_maps,
     summarise_crops,
@@ -76,8 +76,8 @@ def score_file(
 
 
 def paired_line(reference: Path, path: Path, kinds: list[str], rows: dict) -> dict:
-    """`path` against `reference` on the same crops (`validate.paired_difference`) for each
-    of `PAIRED_METRICS`."""
+    """`path` against `reference` on the same crops (`benchmarks.metrics.paired_difference`)
+    for each of `PAIRED_METRICS`."""
     line: dict = {"weights": str(path), "paired_against": str(reference)}
     for metric in PAIRED_METRICS:
         pairs = paired_difference(

@@ -4,8 +4,9 @@ comparison, several minutes per set of crops) is scored once per setting.
 An entry is keyed by the weights file's sha256 and by everything else its numbers depend
 on: the generated crops and real-photo crops (their pixels and maps), the flip-average and
 line-alignment switches, and the scoring code itself (every source file of the core,
-export, runtime, training and udir packages): a code change, a regenerated set or retrained
-weights miss the cache, never read stale numbers.
+benchmarks, export, runtime, training and udir packages; the metrics live in benchmarks):
+a code change, a regenerated set or retrained weights miss the cache, never read stale
+numbers.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ Result = tuple[dict, list[dict[str, float]]]
 # The sub-packages whose code the scores depend on (the core's own files included).
 SCORED_PACKAGES = (
     "doctrpp",
+    "doctrpp.benchmarks",  # MS-SSIM, local distortion, map shape, the reference-free scores
     "doctrpp.export",
     "doctrpp.runtime",
     "doctrpp.training",

@@ -108,21 +108,6 @@ def score_maps(items: list[ValidationItem], predicted: list[np.ndarray]) -> dict
     return summarise_crops([it.kind for it in items], crop_scores(items, predicted))
 
 
-def paired_difference(
-    kinds: list[str], reference: list[float], candidate: list[float]
-) -> dict[str, tuple[float, float]]:
-    """Per kind and overall: the mean of candidate - reference over the same crops and its
-    standard error, so two weights are compared on each crop rather than by their means."""
-    difference = np.asarray(candidate, float) - np.asarray(reference, float)
-    kind_of = np.asarray(kinds)
-    result = {}
-    for kind in [*dict.fromkeys(kinds), "all"]:
-        d = difference if kind == "all" else difference[kind_of == kind]
-        error = float(d.std(ddof=1) / np.sqrt(d.size)) if d.size > 1 else float("nan")
-        result[kind] = (float(d.mean()), error)
-    return result
-
-
 @torch.no_grad()
 def batch_maps(
     model: torch.nn.Module,
