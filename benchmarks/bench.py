@@ -159,16 +159,16 @@ def cross_shot_section(
     with two shots in `photos` (None: all); None where the folder holds fewer than two."""
     from doctrpp.runtime.rectifier import Rectifier
 
-    from .cross_shot import report_entries, shot_pairs
+    from .cross_shot import UNTOUCHED, report_entries, shot_pairs
     from .peers import UVDocPeer, uvdoc_model_path
 
     documents = shot_pairs(photos)[:pairs]
     if len(documents) < 2:
         return None
-    entries = [("untouched photos", lambda image: image)]
+    entries = [(UNTOUCHED, lambda image: image)]
     entries += [(m.name, Rectifier(m, threads=threads).rectify) for m in models]
     uvdoc = uvdoc_model_path() if peers else None
     if uvdoc is not None:
         entries.append(("UVDoc (peer)", UVDocPeer(uvdoc, threads).rectify))
     rows = report_entries(entries, documents, reference.name, status)
-    return {"photos": str(photos), "documents": len(documents), "rows": rows}
+    return {"photos": str(Path(photos).resolve()), "documents": len(documents), "rows": rows}

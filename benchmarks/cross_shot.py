@@ -30,6 +30,7 @@ from doctrpp.runtime.imageio import image_files, read_image
 
 Rectify = Callable[[np.ndarray], np.ndarray]
 MEASURES = ("ms_ssim", "local_distortion")
+UNTOUCHED = "untouched photos"  # the entry of the photos as they are
 
 
 def shot_pairs(folder: Path) -> list[tuple[Path, Path]]:

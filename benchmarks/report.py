@@ -8,6 +8,7 @@ from pathlib import Path
 from doctrpp.export.tolerances import INT8_DRIFT_TARGET_PX
 from doctrpp.files import write_bytes_atomically
 
+from .cross_shot import UNTOUCHED
 from .report_sections import REAL_KINDS, fmt, markdown_sections_for_peers
 
 GENERATED_KINDS = ("complete", "partial", "none")
@@ -309,7 +310,32 @@ def plots(report: dict, out: Path) -> list[str]:
     fig.savefig(out / "drift_vs_latency.png", dpi=110, bbox_inches="tight")  # keep long labels
     plt.close(fig)
     written.append("drift_vs_latency.png")
+    if report.get("cross_shot"):
+        cross_shot_plot(report, out, plt)
+        written.append("cross_shot_vs_latency.png")
     return written
+
+
+def cross_shot_plot(report: dict, out: Path, plt) -> None:
+    """Each model file's cross-shot MS-SSIM against its latency; the untouched photos and
+    the peer as horizontal lines for scale."""
+    latency = {m["name"]: m["latency"].get("2", {}).get("median_ms") for m in report["models"]}
+    fig, ax = plt.subplots(figsize=(5.5, 3.6))
+    for row in report["cross_shot"]["rows"]:
+        # files sit within a few thousandths of each other: a legend, not labels on points
+        if latency.get(row["name"]) is not None:
+            ax.scatter(latency[row["name"]], row["cross_shot_ms_ssim"], label=row["name"])
+        elif row["name"] not in latency:  # the untouched photos, a peer
+            untouched = row["name"] == UNTOUCHED
+            style = {"linestyle": "--" if untouched else ":", "linewidth": 1.0}
+            colour = "gray" if untouched else "black"
+            ax.axhline(row["cross_shot_ms_ssim"], label=row["name"], color=colour, **style)
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.02, 0.5))
+    ax.set_xlabel("median latency, 2 threads (ms)")
+    ax.set_ylabel("cross-shot MS-SSIM (real photos)")
+    fig.tight_layout()
+    fig.savefig(out / "cross_shot_vs_latency.png", dpi=110, bbox_inches="tight")
+    plt.close(fig)
 
 
 def write_report(report: dict, out: Path) -> list[str]:

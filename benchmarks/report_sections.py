@@ -3,6 +3,8 @@ agreement) and on peer models."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 REAL_KINDS = ("real complete", "real partial", "real none")
 
 
@@ -38,7 +40,7 @@ def cross_shot_markdown(report: dict) -> list[str]:
         "## Real photos: cross-shot agreement",
         "",
         f"Both shots of {section['documents']} documents (`<document>_1`, `<document>_2` in "
-        f"{section['photos']}), each rectified as `doctrpp rectify` runs the model "
+        f"{Path(section['photos']).name}/), each rectified as `doctrpp rectify` runs the model "
         "(flip-averaged, text lines aligned), then compared with each other by the measures "
         "of a flat-scan benchmark, the other shot standing in for the scan: unmasked "
         "MS-SSIM (higher = the two results agree more) and local distortion (px, lower = "

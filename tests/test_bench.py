@@ -155,6 +155,7 @@ def test_bench_scores_cross_shot_agreement_of_photo_pairs(tiny_onnx, tmp_path):
     markdown = (out / "report.md").read_text()
     assert "## Real photos: cross-shot agreement" in markdown
     assert f"| {tiny_onnx.name} | " in markdown.split("cross-shot agreement")[1]
+    assert (out / "cross_shot_vs_latency.png").is_file()
     off = tmp_path / "off"
     assert main([*args[:4], str(off), *args[5:], "--cross-shot-pairs", "0"]) == 0
     assert json.loads((off / "report.json").read_text())["cross_shot"] is None
