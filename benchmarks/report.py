@@ -9,7 +9,7 @@ from doctrpp.export.tolerances import INT8_DRIFT_TARGET_PX
 from doctrpp.files import write_bytes_atomically
 
 from .cross_shot import UNTOUCHED
-from .report_sections import REAL_KINDS, fmt, markdown_sections_for_peers
+from .report_sections import REAL_KINDS, fmt, kind_rows, markdown_sections_for_peers
 
 GENERATED_KINDS = ("complete", "partial", "none")
 KINDS = (*GENERATED_KINDS, *REAL_KINDS)
@@ -70,15 +70,17 @@ def markdown(report: dict) -> str:
         "| model | kind | drift mean px | drift max px | MS-SSIM-M | LD-M |",
         "|---|---|---|---|---|---|",
     ]
-    for m in report["models"]:
-        for kind in KINDS:
-            row = m["accuracy"].get(kind, {})
-            if "drift_mean_px" in row:
-                lines.append(
-                    f"| {m['name']} | {kind} | {fmt(row['drift_mean_px'])} | "
-                    f"{fmt(row['drift_max_px'])} | {fmt(row['ms_ssim_m_vs_ref'])} | "
-                    f"{fmt(row['ld_m_vs_ref'], 2)} |"
-                )
+    lines += kind_rows(
+        report["models"],
+        KINDS,
+        "drift_mean_px",
+        lambda row: [
+            fmt(row["drift_mean_px"]),
+            fmt(row["drift_max_px"]),
+            fmt(row["ms_ssim_m_vs_ref"]),
+            fmt(row["ld_m_vs_ref"], 2),
+        ],
+    )
     lines += [
         "",
         "## Accuracy against ground truth (generated crops)",
@@ -91,14 +93,12 @@ def markdown(report: dict) -> str:
             f"| untouched input | {kind} | {fmt(row['gt_map_error_px'], 2)} | "
             f"{fmt(row['gt_ms_ssim_m'])} |"
         )
-    for m in [*report["models"], *report.get("peers", [])]:
-        for kind in GENERATED_KINDS:
-            row = m["accuracy"].get(kind, {})
-            if "gt_map_error_px" in row:
-                lines.append(
-                    f"| {m['name']} | {kind} | {fmt(row['gt_map_error_px'], 2)} | "
-                    f"{fmt(row['gt_ms_ssim_m'])} |"
-                )
+    lines += kind_rows(
+        [*report["models"], *report.get("peers", [])],
+        GENERATED_KINDS,
+        "gt_map_error_px",
+        lambda row: [fmt(row["gt_map_error_px"], 2), fmt(row["gt_ms_ssim_m"])],
+    )
     lines += markdown_sections_for_peers(report)
     if report.get("targets"):
         lines += [

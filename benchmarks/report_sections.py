@@ -16,6 +16,18 @@ def fmt(value, digits: int = 3) -> str:
     return str(value)
 
 
+def kind_rows(models: list[dict], kinds: tuple[str, ...], measured: str, cells) -> list[str]:
+    """A table row per model and kind where the model's accuracy for that kind holds
+    `measured`: model, kind, then `cells(row)` (formatted values)."""
+    lines = []
+    for m in models:
+        for kind in kinds:
+            row = m["accuracy"].get(kind, {})
+            if measured in row:
+                lines.append(f"| {m['name']} | {kind} | " + " | ".join(cells(row)) + " |")
+    return lines
+
+
 def markdown_sections_for_peers(report: dict) -> list[str]:
     """The reference-free table (models and peers), cross-shot agreement and the peers'
     latency table."""
@@ -82,16 +94,18 @@ def reference_free_markdown(report: dict) -> list[str]:
         "| bending px |",
         "|---|---|---|---|---|---|---|",
     ]
-    for m in rows:
-        for kind in REAL_KINDS:
-            row = m["accuracy"].get(kind, {})
-            if "straightness_ratio" in row:
-                lines.append(
-                    f"| {m['name']} | {kind} | {fmt(row.get('coherence_ratio'))} | "
-                    f"{fmt(row['straightness_ratio'])} | {fmt(row['black_share'])} | "
-                    f"{fmt(row['kept_share'])} | {fmt(row.get('nonprojective_px'))} |"
-                )
-    return lines
+    return lines + kind_rows(
+        rows,
+        REAL_KINDS,
+        "straightness_ratio",
+        lambda row: [
+            fmt(row.get("coherence_ratio")),
+            fmt(row["straightness_ratio"]),
+            fmt(row["black_share"]),
+            fmt(row["kept_share"]),
+            fmt(row.get("nonprojective_px")),
+        ],
+    )
 
 
 def _has_real(model: dict) -> bool:
