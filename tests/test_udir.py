@@ -242,6 +242,14 @@ def test_surfaces_folded_over_or_edge_on_are_redrawn():
         assert not folds_over(make_scene(seed, kind_for_index(seed)).surface)
 
 
+def test_a_page_part_reaching_towards_the_camera_is_redrawn():
+    """Seed 3,200,000,080's first surface magnified part of its page ~500x: the complete
+    crop framed a sliver of page in a background five page heights tall. Now redrawn."""
+    scene = make_scene(3_200_000_080, "complete")
+    x0, y0, x1, y1 = scene.crop
+    assert max(x1 - x0, y1 - y0) < 1.5
+
+
 def test_crumpled_pages_have_creases():
     rng = np.random.default_rng(5)
     for _ in range(5):

@@ -322,14 +322,17 @@ def _random_crease(rng: np.random.Generator) -> Fold:
 
 
 def folds_over(p: SurfaceParams, grid: int = 41) -> bool:
-    """Whether the camera sees part of the page folded over another part, or turned almost
-    edge-on (local image area below `MIN_AREA_SCALE` of the median): the image of the page
-    would not be one-to-one, or the crop would show that part too thinly to rectify."""
+    """Whether the camera sees part of the page folded over another part, turned almost
+    edge-on (local image area below `MIN_AREA_SCALE` of the median) or reaching towards the
+    camera plane (above `MAX_AREA_SCALE`): the image of the page would not be one-to-one,
+    the crop would show that part too thinly to rectify, or the page's image would run off
+    so far that a full-page crop shows a sliver of it."""
     u, v = np.meshgrid(np.linspace(0, 1, grid), np.linspace(0, 1, grid))
     _, _, a, b, c, d = image_jacobian(p, u, v)
     area = a * d - b * c  # local image area per unit page area
     area = area * np.sign(np.median(area))
-    return bool(area.min() < R.MIN_AREA_SCALE * np.median(area))
+    median = np.median(area)
+    return bool(area.min() < R.MIN_AREA_SCALE * median or area.max() > R.MAX_AREA_SCALE * median)
 
 
 def _random_lift(rng: np.random.Generator, width: float) -> Lift:
