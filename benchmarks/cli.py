@@ -78,6 +78,15 @@ def _status(message: str) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from doctrpp.runtime.imageio import ImageError
+
+    try:
+        return _benchmark(args)
+    except ImageError as exc:  # an unreadable photo in --photos: one line, not a traceback
+        raise CliError(str(exc)) from None
+
+
+def _benchmark(args: argparse.Namespace) -> int:
     from doctrpp import contract
 
     from .bench import accuracy, describe, generated_probes, photo_probes, untouched_accuracy

@@ -165,3 +165,15 @@ def test_bench_refuses_a_single_cross_shot_pair(tiny_onnx, tmp_path, capsys):
     args = ["bench", "--models", str(tiny_onnx), "--out", str(tmp_path / "r")]
     assert main([*args, "--cross-shot-pairs", "1"]) == 2
     assert "--cross-shot-pairs must be 0 (off) or at least 2" in capsys.readouterr().err
+
+
+def test_bench_names_an_unreadable_photo_in_one_line(tiny_onnx, tmp_path, capsys):
+    photos = tmp_path / "photos"
+    _shots(photos)
+    (photos / "2_2.png").write_bytes(b"not a png")
+    args = ["bench", "--models", str(tiny_onnx), "--out", str(tmp_path / "r"), "--runs", "1"]
+    args += ["--per-kind", "0", "--no-rss", "--no-peers", "--threads", "1", "--photos", str(photos)]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1] == f"doctrpp bench: error: {photos / '2_2.png'}: not a readable image"
+    assert not (tmp_path / "r").exists()
