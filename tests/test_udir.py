@@ -16,11 +16,13 @@ from doctrpp.udir.scene import KINDS
 from doctrpp.udir.surface import (
     Fold,
     Lift,
+    LocalCrease,
     SurfaceParams,
     folds_over,
     invert,
     project,
     random_surface,
+    surface_normals_z,
     surface_points,
 )
 
@@ -255,7 +257,50 @@ def test_crumpled_pages_have_creases():
     for _ in range(5):
         surface = random_surface(rng, 0.75, "crumple")
         assert len(surface.folds) >= ranges.CREASES[0]
+        assert len(surface.creases) >= ranges.LOCAL_CREASES[0]
         assert surface.bumps
+
+
+def test_a_local_crease_kinks_the_page_only_near_its_centre(report_difference):
+    """A local crease pulls the paper in towards its line and lifts it like a fold there;
+    far from its centre the page is flat and in place."""
+    crease = LocalCrease(x=0.0, y=0.0, angle=0.0, length=0.1, width=0.08, slope=0.5, sharpness=0.01)
+    surface = SurfaceParams(width=0.75, creases=(crease,))
+    u = np.array([0.5, 0.5, 0.5, 0.05])
+    v = np.array([0.5, 0.56, 0.44, 0.05])  # on the line, either side of it, far away
+    x, y, z = surface_points(surface, u, v)
+    assert z[0] < 1e-3 < z[1] and abs(z[1] - z[2]) < 1e-9  # a symmetric ridge
+    assert y[1] < v[1] - 0.5 and y[2] > v[2] - 0.5  # pulled in towards the line
+    far = np.abs(np.array([x[3] - (0.05 - 0.5) * 0.75, y[3] + 0.45, z[3]])).max()
+    report_difference("far corner moved", float(far), 1e-6, "page heights")
+    assert far < 1e-6
+
+
+def test_shading_follows_the_page_slope():
+    """Facing the light brightens a page part, turning away darkens it, and an unbent page
+    is unchanged. (Until session 42 a sign error left every page unshaded.)"""
+    from doctrpp.udir.effects import random_look, shading
+
+    look = dataclasses.replace(
+        random_look(np.random.default_rng(0)), light=(0.6, 0.0, -0.8), ambient=0.3
+    )
+    towards = np.array([0.6, 0.0, -0.8])
+    away = np.array([-0.6, 0.0, -0.8])
+    frontal = np.array([0.0, 0.0, -1.0])
+    lit = shading(look, np.stack([towards, away, frontal]), frontal)
+    print(f"shading towards / away / flat: {lit.round(3).tolist()}")
+    assert lit[0] > 1.1 and lit[1] < 0.8 and abs(lit[2] - 1) < 1e-6
+    scene = make_scene(1013, "complete")  # a crumpled page: shaded unevenly
+    assert scene.surface.extra["style"] == "crumple"
+    u, v = np.meshgrid(np.linspace(0, 1, 33), np.linspace(0, 1, 33))
+    flat = surface_normals_z(
+        dataclasses.replace(scene.surface, creases=(), folds=(), bumps=()),
+        np.array(0.5),
+        np.array(0.5),
+    )
+    spread = np.ptp(shading(scene.look, surface_normals_z(scene.surface, u, v), flat))
+    print(f"shading spread over a crumpled page: {spread:.3f}")
+    assert spread > 0.1
 
 
 def test_complete_crops_bend_visibly():

@@ -89,10 +89,15 @@ def random_look(rng: np.random.Generator) -> Look:
 
 
 def shading(look: Look, normals: np.ndarray, flat_normal: np.ndarray) -> np.ndarray:
-    """Lambertian shading of the page relative to the undeformed page (1 = unchanged)."""
+    """Lambertian shading of the page relative to the undeformed page (1 = unchanged).
+
+    Normals face the camera (-Z) and the light direction points towards the light (also
+    -Z), so a page part lit head-on has normal . light = 1. (Until session 42 the sign was
+    flipped: every part clipped to the ambient term and the page showed no shading at all.)
+    """
     light = np.asarray(look.light)
-    lit = look.ambient + (1 - look.ambient) * np.clip(-(normals @ light), 0, 1)
-    reference = look.ambient + (1 - look.ambient) * max(0.0, float(-(flat_normal @ light)))
+    lit = look.ambient + (1 - look.ambient) * np.clip(normals @ light, 0, 1)
+    reference = look.ambient + (1 - look.ambient) * max(0.0, float(flat_normal @ light))
     return np.clip(lit / max(reference, 1e-3), 0.3, 1.25).astype(np.float32)
 
 

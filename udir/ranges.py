@@ -84,6 +84,16 @@ CREASES = (4, 14)  # crumpling: small creases at random angles (upper bound excl
 CREASE_SLOPE = (0.15, 0.6)  # |height gained per unit distance| from a small crease (s7: 0.1-0.4)
 CREASE_OFFSET = 0.45  # |crease distance| from the page centre
 CREASE_SHARPNESS = (0.01, 0.03)
+# Session 42 (a sheet of crumple scenes beside docunet_dev 43_2 and 46_2): real crumpled
+# paper shows many short creases meeting at odd angles, each a sharp line in the shading
+# and a kink in the text lines; ours showed smooth waves (page-long creases and bumps,
+# which only add height). Crumpled pages now also get local creases (surface.LocalCrease)
+# that fade out along and across their line and pull the paper in as a fold does.
+LOCAL_CREASES = (8, 26)  # per crumpled page (upper bound exclusive)
+LOCAL_CREASE_LENGTH = (0.05, 0.22)  # window sigma along the line, page heights
+LOCAL_CREASE_WIDTH = (0.5, 1.0)  # window sigma across the line / along it
+LOCAL_CREASE_SLOPE = (0.15, 0.5)  # |height gained per unit distance| from the line
+LOCAL_CREASE_SHARPNESS = (0.006, 0.02)
 # Session 5 (a sheet of complete crops beside docunet_dev): people photograph a page held
 # square to the phone, so most real pages are upright (roll within a few degrees), seen
 # nearly from the front, and fill the frame; our crops showed rotated trapezoids filling

@@ -47,6 +47,21 @@ class Bump:
 
 
 @dataclass(frozen=True)
+class LocalCrease:
+    """A crease of crumpled paper that fades out along and across its line: the paper
+    bends sharply at the line and is pulled in towards it (text foreshortens and kinks
+    there), as a fold would, but only within a window around the crease's centre."""
+
+    x: float  # centre, page units from the page centre (x across the width, y down)
+    y: float
+    angle: float  # direction of the crease line (radians)
+    length: float  # window sigma along the line
+    width: float  # window sigma across the line
+    slope: float  # signed height gained per unit distance from the line
+    sharpness: float  # rounding of the crease (smaller = sharper)
+
+
+@dataclass(frozen=True)
 class SurfaceParams:
     width: float  # physical page width (height is 1)
     curl_angle: float = 0.0  # direction across which the page curls
@@ -58,6 +73,7 @@ class SurfaceParams:
     folds: tuple[Fold, ...] = ()
     lifts: tuple[Lift, ...] = ()
     bumps: tuple[Bump, ...] = ()  # smooth crumpling
+    creases: tuple[LocalCrease, ...] = ()  # sharp crumpling
     # Camera: rotation (radians), distance and focal length in output pixels, principal point.
     tilt_x: float = 0.0
     tilt_y: float = 0.0
@@ -137,10 +153,24 @@ def surface_points(p: SurfaceParams, u: np.ndarray, v: np.ndarray):
         across, height = _bend(shape, flat)
         x, y = x + (across - flat) * cos, y + (across - flat) * sin
         z = z + height * scale
+    for crease in p.creases:
+        x, y, z = _local_crease(crease, x0, y0, x, y, z)
     for b in p.bumps:
         bx, by = (b.u - 0.5) * p.width, b.v - 0.5
         z = z + b.height * np.exp(-((x0 - bx) ** 2 + (y0 - by) ** 2) / (2 * b.sigma**2))
     return x, y, z
+
+
+def _local_crease(crease: LocalCrease, x0, y0, x, y, z):
+    """Add a windowed fold about the crease line to the points (x, y, z) of flat (x0, y0)."""
+    cos, sin = np.cos(crease.angle), np.sin(crease.angle)
+    dx, dy = x0 - crease.x, y0 - crease.y
+    along = dx * cos + dy * sin
+    flat = -dx * sin + dy * cos  # signed distance from the line
+    window = np.exp(-0.5 * ((along / crease.length) ** 2 + (flat / crease.width) ** 2))
+    across, height = _bend(("fold", 0.0, crease.slope, crease.sharpness), flat)
+    pull = (across - flat) * window
+    return x - pull * sin, y + pull * cos, z + height * window
 
 
 def project(p: SurfaceParams, u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -263,10 +293,14 @@ def random_surface(
     folds: list[Fold] = []
     if style in ("fold", "combined"):
         folds += [_random_fold(rng) for _ in range(int(rng.integers(1, R.FOLDS_MAX + 1)))]
-    if style == "crumple" or (style == "combined" and rng.random() < 0.5):
+    crumpled = style == "crumple" or (style == "combined" and rng.random() < 0.5)
+    if crumpled:
         folds += [_random_crease(rng) for _ in range(int(rng.integers(*R.CREASES)))]
     if folds:
         kw["folds"] = tuple(folds)
+    if crumpled:
+        count = int(rng.integers(*R.LOCAL_CREASES))
+        kw["creases"] = tuple(_random_local_crease(rng, width) for _ in range(count))
     if style == "lift" or (style == "combined" and rng.random() < R.LIFT_IN_COMBINED):
         kw["lifts"] = tuple(_random_lift(rng, width) for _ in range(int(rng.integers(1, 3))))
     if style in ("crumple", "combined"):
@@ -318,6 +352,19 @@ def _random_crease(rng: np.random.Generator) -> Fold:
         offset=float(rng.uniform(-R.CREASE_OFFSET, R.CREASE_OFFSET)),
         height=float(rng.choice([-1.0, 1.0]) * rng.uniform(*R.CREASE_SLOPE)),
         sharpness=float(rng.uniform(*R.CREASE_SHARPNESS)),
+    )
+
+
+def _random_local_crease(rng: np.random.Generator, width: float) -> LocalCrease:
+    length = float(rng.uniform(*R.LOCAL_CREASE_LENGTH))
+    return LocalCrease(
+        x=float(rng.uniform(-0.5, 0.5) * width),
+        y=float(rng.uniform(-0.5, 0.5)),
+        angle=float(rng.uniform(0, np.pi)),
+        length=length,
+        width=length * float(rng.uniform(*R.LOCAL_CREASE_WIDTH)),
+        slope=float(rng.choice([-1.0, 1.0]) * rng.uniform(*R.LOCAL_CREASE_SLOPE)),
+        sharpness=float(rng.uniform(*R.LOCAL_CREASE_SHARPNESS)),
     )
 
 
