@@ -23,7 +23,7 @@ NEWTON_TOLERANCE = 1e-9  # page units; outputs stayed bit-identical to 12 full i
 
 @dataclass(frozen=True)
 class Fold:
-    angle: float  # direction of the crease line in the page plane (radians)
+    angle: float  # direction across the crease, along which the paper bends (radians)
     offset: float  # signed distance of the crease from the page centre
     height: float  # how far the crease pushes out of the plane per unit distance
     sharpness: float  # smaller = sharper crease
@@ -54,7 +54,7 @@ class LocalCrease:
 
     x: float  # centre, page units from the page centre (x across the width, y down)
     y: float
-    angle: float  # direction of the crease line (radians)
+    angle: float  # direction of the crease line itself (a Fold's angle runs across it)
     length: float  # window sigma along the line
     width: float  # window sigma across the line
     slope: float  # signed height gained per unit distance from the line
@@ -293,14 +293,12 @@ def random_surface(
     folds: list[Fold] = []
     if style in ("fold", "combined"):
         folds += [_random_fold(rng) for _ in range(int(rng.integers(1, R.FOLDS_MAX + 1)))]
-    crumpled = style == "crumple" or (style == "combined" and rng.random() < 0.5)
-    if crumpled:
+    if style == "crumple" or (style == "combined" and rng.random() < 0.5):
         folds += [_random_crease(rng) for _ in range(int(rng.integers(*R.CREASES)))]
-    if folds:
-        kw["folds"] = tuple(folds)
-    if crumpled:
         count = int(rng.integers(*R.LOCAL_CREASES))
         kw["creases"] = tuple(_random_local_crease(rng, width) for _ in range(count))
+    if folds:
+        kw["folds"] = tuple(folds)
     if style == "lift" or (style == "combined" and rng.random() < R.LIFT_IN_COMBINED):
         kw["lifts"] = tuple(_random_lift(rng, width) for _ in range(int(rng.integers(1, 3))))
     if style in ("crumple", "combined"):
