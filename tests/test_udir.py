@@ -303,6 +303,32 @@ def test_shading_follows_the_page_slope():
     assert spread > 0.1
 
 
+def test_a_crop_sees_its_own_part_of_the_lights_and_shadows(report_difference):
+    """Lights and shadows lie over the photo's frame: lighting a window of it gives that
+    window's pixels of the whole frame's lighting, and a crop from the middle of a page is
+    such a window (until session 43 every crop saw all of them at its own scale)."""
+    from doctrpp.udir.effects import apply_lighting, random_look
+
+    look = dataclasses.replace(
+        random_look(np.random.default_rng(3)),
+        shadow=(0.1, 0.2, 0.9, 0.7, 0.5, 0.05),
+        hand_shadow=(0.5, 0.5, 0.3, 0.2, 30.0, 0.6),
+        highlight=(0.4, 0.6, 0.2, 40.0),
+        vignette=0.3,
+    )
+    grey = np.full((101, 101, 3), 200, np.float32)
+    frame = apply_lighting(look, grey)
+    part = apply_lighting(look, grey[:41, :41], (0.2, 0.3, 0.6, 0.7))
+    largest = float(np.abs(part - frame[30:71, 20:61]).max())
+    report_difference("window of the frame's lighting", largest, 1e-2, "grey levels")
+    assert largest <= 1e-2
+    assert np.ptp(frame) > 50  # the lights do show
+    none = make_scene(202, "none")
+    x0, y0, x1, y1 = none.lighting_window()
+    print(f"no-boundary crop's window of the frame: {x0:.2f} {y0:.2f} {x1:.2f} {y1:.2f}")
+    assert 0 <= x0 < x1 <= 1 and 0 <= y0 < y1 <= 1 and (x1 - x0) * (y1 - y0) < 0.5
+
+
 def test_complete_crops_bend_visibly():
     """Session 7: complete crops' maps bend beyond a perspective as real photos do (median
     2.3 px at 288 over these seeds; session 6's cameras and bends gave 1.6 px, with text

@@ -32,11 +32,19 @@ def random_look(rng: np.random.Generator) -> Look:
     light = np.array([*rng.normal(0, ranges.LIGHT_OBLIQUE_SIGMA, 2), -1.0])
     light /= np.linalg.norm(light)
     shadow: tuple[float, ...] = ()
-    if rng.random() < 0.35:
-        shadow = (*rng.uniform(-0.2, 1.2, 4), rng.uniform(0.45, 0.85), rng.uniform(0.01, 0.12))
+    if rng.random() < ranges.CAST_SHADOW_SHARE:
+        shadow = (
+            *rng.uniform(-0.2, 1.2, 4),
+            rng.uniform(*ranges.CAST_SHADOW_STRENGTH),
+            rng.uniform(*ranges.CAST_SHADOW_SOFTNESS),
+        )
     highlight: tuple[float, ...] = ()
-    if rng.random() < 0.2:
-        highlight = (*rng.uniform(0, 1, 2), rng.uniform(0.1, 0.5), rng.uniform(20, 80))
+    if rng.random() < ranges.HIGHLIGHT_SHARE:
+        highlight = (
+            *rng.uniform(0, 1, 2),
+            rng.uniform(*ranges.HIGHLIGHT_RADIUS),
+            rng.uniform(*ranges.HIGHLIGHT_STRENGTH),
+        )
     motion: tuple[float, ...] = ()
     if rng.random() < ranges.MOTION_SHARE:
         motion = (rng.uniform(*ranges.MOTION_LENGTH), rng.uniform(0, 180))
@@ -46,7 +54,7 @@ def random_look(rng: np.random.Generator) -> Look:
             *rng.uniform(-0.1, 1.1, 2),
             *rng.uniform(0.15, 0.5, 2),
             rng.uniform(0, 180),
-            rng.uniform(0.45, 0.8),
+            rng.uniform(*ranges.HAND_SHADOW_STRENGTH),
         )
     fingers: tuple[float, ...] = ()
     if rng.random() < ranges.FINGERS_SHARE:
@@ -71,8 +79,8 @@ def random_look(rng: np.random.Generator) -> Look:
         ambient=float(rng.uniform(*ranges.AMBIENT)),
         gradient=(
             float(rng.uniform(0, 2 * np.pi)),
-            float(rng.uniform(0.7, 1.0)),
-            float(rng.uniform(1.0, 1.12)),
+            float(rng.uniform(*ranges.GRADIENT_LOW)),
+            float(rng.uniform(*ranges.GRADIENT_HIGH)),
         ),
         shadow=tuple(float(c) for c in shadow),
         highlight=tuple(float(c) for c in highlight),
@@ -101,36 +109,46 @@ def shading(look: Look, normals: np.ndarray, flat_normal: np.ndarray) -> np.ndar
     return np.clip(lit / max(reference, 1e-3), 0.3, 1.25).astype(np.float32)
 
 
-def apply_lighting(look: Look, image: np.ndarray) -> np.ndarray:
-    """Gradient, cast shadow and highlight over the whole crop (float32 in, float32 out)."""
+def apply_lighting(
+    look: Look, image: np.ndarray, window: tuple[float, float, float, float] = (0, 0, 1, 1)
+) -> np.ndarray:
+    """Gradient, cast shadows, vignette and highlight (float32 in, float32 out).
+
+    They are drawn over a frame, the whole photo the crop was cut from, and `window` is the
+    crop's part of that frame (x0, y0, x1, y1 in frame fractions). A crop cut from the
+    middle of a page sees only part of a shadow or a gradient, as a crop cut from a real
+    photo does (until session 43 every crop saw all of them at crop scale).
+    """
     h, w = image.shape[:2]
-    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
-    xx /= max(w - 1, 1)
-    yy /= max(h - 1, 1)
+    x0, y0, x1, y1 = window
+    xx, yy = np.meshgrid(
+        np.linspace(x0, x1, w, dtype=np.float32), np.linspace(y0, y1, h, dtype=np.float32)
+    )
     angle, low, high = look.gradient
     t = np.clip(0.5 + (xx - 0.5) * np.cos(angle) + (yy - 0.5) * np.sin(angle), 0, 1)
     factor = low + (high - low) * t
     if look.shadow:
-        x0, y0, x1, y1, strength, softness = look.shadow
+        sx0, sy0, sx1, sy1, strength, softness = look.shadow
         # A half-plane shadow through two points, with a soft edge.
-        side = (x1 - x0) * (yy - y0) - (y1 - y0) * (xx - x0)
-        side /= np.hypot(x1 - x0, y1 - y0) + 1e-6
+        side = (sx1 - sx0) * (yy - sy0) - (sy1 - sy0) * (xx - sx0)
+        side /= np.hypot(sx1 - sx0, sy1 - sy0) + 1e-6
         inside = 0.5 * (1 + np.tanh(side / (2 * max(softness, 1e-3))))  # sigmoid, no overflow
         factor = factor * (1 - (1 - strength) * inside)
     if look.hand_shadow:
-        factor = factor * _hand_shadow(look.hand_shadow, h, w)
+        factor = factor * _hand_shadow(look.hand_shadow, xx, yy)
     if look.vignette:
         factor = factor * (1 - look.vignette * ((xx - 0.5) ** 2 + (yy - 0.5) ** 2) * 2)
     out = image * factor[..., None]
     if look.highlight:
-        x, y, radius, strength = look.highlight
-        glare = strength * np.exp(-((xx - x) ** 2 + (yy - y) ** 2) / (2 * radius**2))
+        hx, hy, radius, strength = look.highlight
+        glare = strength * np.exp(-((xx - hx) ** 2 + (yy - hy) ** 2) / (2 * radius**2))
         out = out + glare[..., None]
     return out * np.asarray(look.colour_cast, np.float32)
 
 
-def _hand_shadow(params: tuple[float, ...], h: int, w: int) -> np.ndarray:
-    """A soft elliptic shadow with finger-like lobes (of a hand or a phone), as a factor."""
+def _hand_shadow(params: tuple[float, ...], xx: np.ndarray, yy: np.ndarray) -> np.ndarray:
+    """A soft elliptic shadow with finger-like lobes (of a hand or a phone), as a factor at
+    frame positions (xx, yy)."""
     x, y, rx, ry, angle, strength = params
     small = np.zeros((64, 64), np.float32)
     centre = (int(x * 64), int(y * 64))
@@ -149,7 +167,11 @@ def _hand_shadow(params: tuple[float, ...], h: int, w: int) -> np.ndarray:
             max(1, int(ry * 64 * 0.3)),
         )
     small = cv2.GaussianBlur(small, (0, 0), 3.0)
-    return 1 - (1 - strength) * cv2.resize(small, (w, h), interpolation=cv2.INTER_LINEAR)
+    # The 64 px drawing spans the frame's [0, 1] (as cv2.resize to the frame would place it).
+    shade = cv2.remap(
+        small, xx * 64 - 0.5, yy * 64 - 0.5, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
+    )
+    return 1 - (1 - strength) * shade
 
 
 def draw_fingers(image: np.ndarray, look: Look, base: np.ndarray, inward: np.ndarray) -> None:

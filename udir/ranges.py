@@ -172,7 +172,18 @@ PARTIAL_CROP_SIZE = (0.4, 0.9)  # side / page bounding box side
 PARTIAL_PAGE_SHARE = (0.3, 0.9)  # of the crop covered by the page
 
 # -- capture (effects.py) --------------------------------------------------------------------
+# Lights and shadows are drawn over the photo's frame (the page's bounding box); a crop sees
+# its own part of them (effects.apply_lighting). Strengths are the factor left in shadow.
+GRADIENT_LOW = (0.7, 1.0)  # brightness factor at the dark end of a ramp across the frame
+GRADIENT_HIGH = (1.0, 1.12)  # ... and at its bright end
+CAST_SHADOW_SHARE = 0.35  # a straight-edged shadow (of a wall, a lamp arm) over part
+CAST_SHADOW_STRENGTH = (0.45, 0.85)
+CAST_SHADOW_SOFTNESS = (0.01, 0.12)  # edge width / frame side
+HIGHLIGHT_SHARE = 0.2  # a glossy glare
+HIGHLIGHT_RADIUS = (0.1, 0.5)  # / frame side
+HIGHLIGHT_STRENGTH = (20, 80)  # grey levels added at its centre
 HAND_SHADOW_SHARE = 0.25  # a soft shadow of a hand or phone
+HAND_SHADOW_STRENGTH = (0.45, 0.8)
 FINGERS_SHARE = 0.15  # fingers holding the page edge (complete and partial crops)
 VIGNETTE = (0.0, 0.35)  # darkening at the corners
 WHITE_BALANCE = (0.9, 1.08)  # per-channel gain

@@ -12,20 +12,12 @@ from . import ranges
 from .documents import render_page
 from .effects import random_look
 from .paper import reversed_print
-from .scene import KINDS, Scene
+from .scene import KINDS, Scene, page_outline
 from .surface import folds_over, invert, project, random_surface
 
 
 class CropError(RuntimeError):
     """No crop of the asked kind could be found for this scene (the caller redraws)."""
-
-
-def _page_outline(surface, samples: int = 64) -> np.ndarray:
-    t = np.linspace(0, 1, samples)
-    zeros, ones = np.zeros_like(t), np.ones_like(t)
-    u = np.concatenate([t, ones, t[::-1], zeros])
-    v = np.concatenate([zeros, t, ones, t[::-1]])
-    return np.stack(project(surface, u, v), -1)
 
 
 def _page_fraction(surface, box, grid: int = 24) -> float:
@@ -40,7 +32,7 @@ def _box_around(rng, centre, width, height):
 
 
 def choose_crop(rng: np.random.Generator, surface, kind: str) -> tuple[float, float, float, float]:
-    outline = _page_outline(surface)
+    outline = page_outline(surface)
     (bx0, by0), (bx1, by1) = outline.min(0), outline.max(0)
     bw, bh = bx1 - bx0, by1 - by0
     if kind == "complete":

@@ -29,6 +29,15 @@ def _grid(box: tuple[float, float, float, float], h: int, w: int) -> tuple[np.nd
     return np.meshgrid(np.linspace(x0, x1, w), np.linspace(y0, y1, h))
 
 
+def page_outline(surface, samples: int = 64) -> np.ndarray:
+    """(4 * samples, 2) points of the page's border in image-plane coordinates."""
+    t = np.linspace(0, 1, samples)
+    zeros, ones = np.zeros_like(t), np.ones_like(t)
+    u = np.concatenate([t, ones, t[::-1], zeros])
+    v = np.concatenate([zeros, t, ones, t[::-1]])
+    return np.stack(project(surface, u, v), -1)
+
+
 def upsample(values: np.ndarray, h: int, w: int) -> np.ndarray:
     """Bilinear upsampling with align_corners semantics (coarse corners = fine corners)."""
     gh, gw = values.shape[:2]
@@ -93,6 +102,15 @@ class Scene:
         py = (y - y0) / (y1 - y0) * (h - 1)
         point = np.array([px[0], py[0]])
         return point, np.array([px[1], py[1]]) - point
+
+    def lighting_window(self) -> tuple[float, float, float, float]:
+        """The crop as a part of the photo's frame (the page's bounding box), in its fractions:
+        lights and shadows fall on the whole scene, of which a crop sees its own part."""
+        outline = page_outline(self.surface)
+        (bx0, by0), (bx1, by1) = outline.min(0), outline.max(0)
+        bw, bh = max(bx1 - bx0, 1e-9), max(by1 - by0, 1e-9)
+        x0, y0, x1, y1 = self.crop
+        return ((x0 - bx0) / bw, (y0 - by0) / bh, (x1 - bx0) / bw, (y1 - by0) / bh)
 
     # -- pictures -----------------------------------------------------------------
     def _texture(self, pixels_per_page: float) -> np.ndarray:
@@ -163,5 +181,5 @@ class Scene:
         if self.look.fingers and self.kind != "none":
             image = np.ascontiguousarray(image, dtype=np.float32)
             draw_fingers(image, self.look, *self._edge_point(self.look.fingers[0], h, w))
-        image = apply_lighting(self.look, image)
+        image = apply_lighting(self.look, image, self.lighting_window())
         return apply_camera(self.look, image, np.random.default_rng(self.noise_seed))
