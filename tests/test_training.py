@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import os
 
 import numpy as np
 import pytest
@@ -156,7 +157,7 @@ def test_sigterm_to_the_process_group_checkpoints_cleanly(tmp_path):
     os.killpg(process.pid, signal.SIGTERM)
     out, err = process.communicate(timeout=300)
     assert process.returncode == 0, err[-2000:]
-    assert "stopped at step" in out
+    assert "stop requested" in out and "stopped at step" in out
     state = torch.load(run / "last.pth", weights_only=True)["train_state"]
     assert state["step"] >= 1
 
@@ -358,3 +359,17 @@ def test_loss_terms_train_and_the_cli_rejects_negative_weights(tmp_path, capsys)
     assert code == 2  # a weights-only snapshot has no optimiser: one line naming --init
     err = capsys.readouterr().err.strip()
     assert "no optimizer, scheduler" in err and "--init" in err and len(err.splitlines()) == 1
+
+
+def test_a_second_trainer_on_a_busy_run_folder_gets_one_line(tmp_path, capsys):
+    from doctrpp.cli import main
+    from doctrpp.training.runlog import run_folder_lock
+
+    out = tmp_path / "busy"
+    with run_folder_lock(out):  # as a running (or still stopping) trainer holds it
+        code = main(["train", "--out", str(out), "--config", "tiny", "--steps", "1"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "in use by another training process" in err
+    assert f"pid {os.getpid()}" in err and len(err.splitlines()) == 1
+    with run_folder_lock(out):  # released on exit: the folder is free again
+        pass

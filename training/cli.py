@@ -208,6 +208,7 @@ def run(args: argparse.Namespace) -> int:
     require("torch", extra="export")
 
     from .loop import TrainSettings, train
+    from .runlog import RunFolderBusy, run_folder_lock
 
     if args.init and args.resume:
         raise CliError("--init and --resume exclude each other (--resume keeps the optimiser)")
@@ -284,9 +285,14 @@ def run(args: argparse.Namespace) -> int:
         worker_start=args.worker_start,
         seed=args.seed,
     )
-    state = train(settings)
-    if os.environ.get("RANK", "0") != "0":
+    if os.environ.get("RANK", "0") != "0":  # rank 0 holds the folder for all ranks
+        train(settings)
         return 0
+    try:
+        with run_folder_lock(args.out):
+            state = train(settings)
+    except RunFolderBusy as exc:
+        raise CliError(str(exc)) from None
     print(
         f"stopped at step {state['step']} ({state['samples_seen']} samples, "
         f"{state['cpu_seconds'] / 3600:.2f} CPU hours training, "

@@ -203,9 +203,17 @@ def train(s: TrainSettings) -> dict:
         print("identity baseline:", json.dumps({k: round(v, 3) for k, v in baseline.items()}))
 
     stop = {"now": False}
-    previous_handlers = {  # SIGTERM/Ctrl-C: finish the step, checkpoint, exit
-        sig: signal.signal(sig, lambda *_: stop.update(now=True))
-        for sig in (signal.SIGTERM, signal.SIGINT)
+
+    def request_stop(*_) -> None:  # SIGTERM/Ctrl-C: finish the step, checkpoint, exit
+        if env.main and not stop["now"]:
+            print(
+                "stop requested: finishing this step, then last.pth and a last validation",
+                flush=True,
+            )
+        stop["now"] = True
+
+    previous_handlers = {
+        sig: signal.signal(sig, request_stop) for sig in (signal.SIGTERM, signal.SIGINT)
     }
     autocast_dtype = torch.bfloat16 if s.bf16 else None
     started, cpu_started = time.time(), time.process_time()

@@ -4,7 +4,46 @@ from __future__ import annotations
 
 import csv
 import json
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
+
+try:
+    import fcntl
+except ImportError:  # Windows: no advisory locks; runs go unguarded
+    fcntl = None
+
+
+class RunFolderBusy(RuntimeError):
+    """Another process is training into this run folder."""
+
+
+@contextmanager
+def run_folder_lock(out: Path) -> Iterator[None]:
+    """Hold RUN_DIR/.lock while a run trains into RUN_DIR.
+
+    Two trainers in one folder would interleave their checkpoints and logs; a stopped run
+    is not gone at once (on SIGTERM it finishes the step, saves last.pth, validates).
+    The lock dies with the process, even a killed one.
+    """
+    out.mkdir(parents=True, exist_ok=True)
+    fd = os.open(out / ".lock", os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        if fcntl is not None:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                holder = os.pread(fd, 32, 0).decode(errors="replace").strip() or "unknown"
+                raise RunFolderBusy(
+                    f"{out} is in use by another training process (pid {holder}); wait for "
+                    "it to stop (it saves last.pth and validates first) or stop it"
+                ) from None
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, str(os.getpid()).encode(), 0)
+        yield
+    finally:
+        os.close(fd)
 
 
 class RunLog:
