@@ -207,7 +207,8 @@ def train(s: TrainSettings) -> dict:
     def request_stop(*_) -> None:  # SIGTERM/Ctrl-C: finish the step, checkpoint, exit
         if env.main and not stop["now"]:
             print(
-                "stop requested: finishing this step, then last.pth and a last validation",
+                "stop requested: finishing this step, then last.pth and (unless this step "
+                "validated) a last validation",
                 flush=True,
             )
         stop["now"] = True
