@@ -133,7 +133,6 @@ def test_torchrun_ddp_on_cpu(tmp_path):
 def test_sigterm_to_the_process_group_checkpoints_cleanly(tmp_path):
     """Ctrl-C or `kill -- -PGID` reaches the data workers too: they must leave stopping
     to the trainer, which writes last.pth and exits 0."""
-    import os
     import signal
     import subprocess
     import sys
