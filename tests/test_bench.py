@@ -177,3 +177,18 @@ def test_bench_names_an_unreadable_photo_in_one_line(tiny_onnx, tmp_path, capsys
     err = capsys.readouterr().err.strip().splitlines()
     assert err[-1] == f"doctrpp bench: error: {photos / '2_2.png'}: not a readable image"
     assert not (tmp_path / "r").exists()
+
+
+def test_bench_reads_the_load_average_before_its_own_work(tiny_onnx, tmp_path, monkeypatch):
+    """The report's load warning is about other work: it must not see the bench's own."""
+    from doctrpp.benchmarks import bench, environment
+
+    busy = []  # the load average rises once the bench's own work has begun
+    real_accuracy = bench.accuracy
+    monkeypatch.setattr(bench, "accuracy", lambda *a: busy.append(1) or real_accuracy(*a))
+    monkeypatch.setattr(environment, "load_average", lambda: 9.0 if busy else 0.1)
+    out = tmp_path / "r"
+    args = ["bench", "--models", str(tiny_onnx), "--out", str(out), "--runs", "1"]
+    assert main([*args, "--per-kind", "0", "--no-peers", "--no-rss"]) == 0
+    assert json.loads((out / "report.json").read_text())["load_average"] == 0.1
+    assert "load average" not in (out / "report.md").read_text()
