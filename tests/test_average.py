@@ -56,6 +56,16 @@ def test_a_cycle_and_its_start_add_nothing(lineage):
     assert state["cpu_seconds"] == 1500.0 and state["averaged_from"] == [100, 150]
 
 
+def test_a_grandparent_is_counted_in_its_grandchild(lineage, tmp_path):
+    # a cycle continued from "first": averaging it with "ancestor" needs "first" named
+    _checkpoint(tmp_path / "third.pt", 3, 200, 150, 2000.0)
+    with pytest.raises(CliError, match="--ancestor"):
+        average([lineage["ancestor"], tmp_path / "third.pt"], [])
+    state = average([lineage["ancestor"], tmp_path / "third.pt"], [lineage["first"]])
+    assert state["train_state"]["cpu_seconds"] == 2000.0
+    assert state["train_state"]["averaged_from"] == [100, 200]
+
+
 def test_missing_ancestor_and_bad_input_are_clear(lineage, tmp_path):
     with pytest.raises(CliError, match="--ancestor"):
         average([lineage["first"], lineage["second"]], [])

@@ -15,7 +15,8 @@ run folder.
 The training state counts CPU hours and samples once: the source with the most CPU time
 is the base, and each other source adds only what it trained after its own start (its
 `schedule_start`), which must be the step of the base's lineage or of an `--ancestor`
-checkpoint given here (the weights it started from).
+checkpoint given here (the weights it started from). A source that another grew from,
+directly or through the given checkpoints' starts, is counted in that one.
 """
 
 from __future__ import annotations
@@ -57,15 +58,25 @@ def mean_state_dict(states: list[dict]) -> dict:
     }
 
 
+def lineage_steps(state: dict, known: dict[int, dict]) -> set[int]:
+    """Steps of the checkpoints `state` grew from, followed back through `known`."""
+    steps: set[int] = set()
+    start = state.get("schedule_start")
+    while start is not None and start not in steps:
+        steps.add(start)
+        start = known.get(start, {}).get("schedule_start")
+    return steps
+
+
 def combined_state(states: list[dict], ancestors: list[dict]) -> dict:
     """The averaged weights' training state: the base's (most CPU time) plus, for each
-    other source that is not where another began, what it trained after its ancestor."""
+    other source that no other source grew from, what it trained after its ancestor."""
     base = max(states, key=lambda s: s["cpu_seconds"])
     known = {s["step"]: s for s in [*ancestors, *states]}
     combined = dict(base)
-    starts = {s.get("schedule_start") for s in states}
+    grown_from = set().union(*(lineage_steps(s, known) for s in states))
     for state in states:
-        if state is base or state["step"] in starts:
+        if state is base or state["step"] in grown_from:
             continue  # the base, or where another source began: counted in that one
         start = state.get("schedule_start")
         check(
