@@ -77,7 +77,7 @@ def combined_state(states: list[dict], ancestors: list[dict]) -> dict:
     grown_from = set().union(*(lineage_steps(s, known) for s in states))
     for state in states:
         if state is base or state["step"] in grown_from:
-            continue  # the base, or where another source began: counted in that one
+            continue  # the base, or a checkpoint another source grew from: counted there
         start = state.get("schedule_start")
         check(
             start in known and known[start]["cpu_seconds"] <= state["cpu_seconds"],
