@@ -15,7 +15,7 @@ from doctrpp.export.checkpoint import load_model
 from doctrpp.export.config import TINY
 from doctrpp.files import save_npy_atomically
 from doctrpp.runtime.imageio import write_image
-from doctrpp.training.loop import TrainSettings, train
+from doctrpp.training.loop import TrainSettings, time_limit_warning, train
 from doctrpp.udir.sample import generate
 
 
@@ -372,3 +372,10 @@ def test_a_second_trainer_on_a_busy_run_folder_gets_one_line(tmp_path, capsys):
     assert f"pid {os.getpid()}" in err and len(err.splitlines()) == 1
     with run_folder_lock(out):  # released on exit: the folder is free again
         pass
+
+
+def test_a_cycle_longer_than_max_minutes_is_warned_about():
+    # 7.7 s a step, 3 minutes gone, at step 30 of 1100: the 109 minutes left fit 849 steps.
+    warning = time_limit_warning(7.7, 180.0, 30, 1100, 112)
+    assert warning and "near step 879 of 1100" in warning and "lower --steps" in warning
+    assert time_limit_warning(5.0, 180.0, 30, 1100, 112) is None  # 1070 steps in 5,540 s

@@ -97,6 +97,27 @@ def carried_state(weights: dict) -> dict:
     }
 
 
+# Steps the pace is measured over before the run says whether its cycle fits --max-minutes
+# (the first few steps include start-up and the data workers' warm-up).
+PACE_FROM_STEP, PACE_TO_STEP = 10, 30
+
+
+def time_limit_warning(
+    seconds_per_step: float, elapsed_s: float, step: int, last_step: int, max_minutes: float
+) -> str | None:
+    """A warning when, at `seconds_per_step`, --max-minutes stops the run before `last_step`:
+    such a run ends mid-cycle, its lr still above the cycle's end (a slower machine than the
+    one a command was written on, e.g. one without native bf16, is the usual cause)."""
+    steps_that_fit = int(max(60 * max_minutes - elapsed_s, 0) / max(seconds_per_step, 1e-9))
+    if step + steps_that_fit >= last_step:
+        return None
+    return (
+        f"warning: at {seconds_per_step:.1f} s a step --max-minutes {max_minutes:g} stops "
+        f"this run near step {step + steps_that_fit} of {last_step}, its lr cycle unfinished "
+        f"(validations not counted); lower --steps or raise --max-minutes"
+    )
+
+
 def _schedule(optimiser, s: TrainSettings):
     return torch.optim.lr_scheduler.OneCycleLR(
         # +1: the scheduler counts its construction as a step; s.steps updates follow.
@@ -268,7 +289,7 @@ def train(s: TrainSettings) -> dict:
             state["best_map_error_px"] = scores["map_error_px/all"]
             save_checkpoint(s.out / "best.pth", payload())
 
-    last_time = time.time()
+    last_time = pace_started = time.time()
     first_step = state["step"]
     batches = iter(loader)
     try:
@@ -304,9 +325,21 @@ def train(s: TrainSettings) -> dict:
                     now - started,
                 )
                 last_time = now
+                done = state["step"] - first_step
+                if done == PACE_FROM_STEP:
+                    pace_started = now
+                if done == PACE_TO_STEP and s.max_minutes:
+                    warning = time_limit_warning(
+                        (now - pace_started) / (PACE_TO_STEP - PACE_FROM_STEP),
+                        now - started,
+                        state["step"],
+                        last_step,
+                        s.max_minutes,
+                    )
+                    if warning:
+                        print(warning, flush=True)
                 if state["step"] % 10 == 0 or state["step"] == 1:
                     elapsed = now - started
-                    done = state["step"] - first_step
                     eta = elapsed / max(done, 1) * (last_step - state["step"])
                     print(
                         f"step {state['step']}/{last_step} loss {loss.item():.3f} px "
