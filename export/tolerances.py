@@ -6,7 +6,9 @@ fp32 and fp16 are parity checks (the largest difference); int8 is the drift targ
 
 from __future__ import annotations
 
-PARITY_TOLERANCE_PX = 1e-3
+# 2e-3, not 1e-3: the trained default's fp32 ONNX differs from PyTorch by 0.78e-3 px on an
+# AVX-512 CPU and 1.07e-3 px on an AVX2 one (float32 summation order in the kernels).
+PARITY_TOLERANCE_PX = 2e-3
 INT8_DRIFT_TARGET_PX = {"mean": 0.5, "max": 3.0}
 TOLERANCE_PX: dict[str, dict[str, float]] = {
     "fp32": {"max": PARITY_TOLERANCE_PX},
